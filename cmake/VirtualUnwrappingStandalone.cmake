@@ -1,0 +1,86 @@
+# Plain-CMake build of the module against an installed ITK that lacks ITK's module
+# macros (Debian's libinsighttoolkit5-dev). Reads the module's dependencies from
+# itk-module.cmake so that both build modes agree.
+set(VU_STANDALONE ON)
+
+if(NOT CMAKE_BUILD_TYPE AND NOT CMAKE_CONFIGURATION_TYPES)
+  set(CMAKE_BUILD_TYPE Release CACHE STRING "Build type" FORCE)
+endif()
+
+set(CMAKE_RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/bin)
+set(CMAKE_LIBRARY_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/lib)
+set(CMAKE_ARCHIVE_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/lib)
+set(CMAKE_POSITION_INDEPENDENT_CODE ON)
+set(CMAKE_EXPORT_COMPILE_COMMANDS ON)
+
+# Record what itk-module.cmake asks for.
+macro(itk_module _name)
+  cmake_parse_arguments(_vu_mod "ENABLE_SHARED;EXCLUDE_FROM_DEFAULT"
+    "" "DEPENDS;PUBLIC_DEPENDS;PRIVATE_DEPENDS;COMPILE_DEPENDS;TEST_DEPENDS;DESCRIPTION;FACTORY_NAMES" ${ARGN})
+  set(VU_MODULE_NAME ${_name})
+  set(VU_MODULE_DEPENDS ${_vu_mod_DEPENDS} ${_vu_mod_PUBLIC_DEPENDS}
+    ${_vu_mod_PRIVATE_DEPENDS} ${_vu_mod_COMPILE_DEPENDS})
+  set(VU_MODULE_TEST_DEPENDS ${_vu_mod_TEST_DEPENDS})
+endmacro()
+include(${CMAKE_CURRENT_SOURCE_DIR}/itk-module.cmake)
+
+# ITK's own GoogleTest target is not installed by Debian: the system GTest serves.
+list(REMOVE_ITEM VU_MODULE_TEST_DEPENDS ITKGoogleTest)
+set(VU_ITK_COMPONENTS ${VU_MODULE_DEPENDS} ${VU_MODULE_TEST_DEPENDS})
+list(REMOVE_DUPLICATES VU_ITK_COMPONENTS)
+find_package(ITK 5.2 REQUIRED COMPONENTS ${VU_ITK_COMPONENTS})
+include(${ITK_USE_FILE})
+# ITK's headers are not ours to warn about.
+include_directories(SYSTEM ${ITK_INCLUDE_DIRS})
+
+set(VU_WARNING_FLAGS -Wall -Wextra)
+
+function(itk_module_add_library _name)
+  add_library(${_name} SHARED ${ARGN})
+  target_include_directories(${_name} PUBLIC
+    $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include>
+    $<BUILD_INTERFACE:${PROJECT_BINARY_DIR}/include>
+    $<INSTALL_INTERFACE:include/VirtualUnwrapping>)
+  target_link_libraries(${_name} PUBLIC ${ITK_LIBRARIES})
+  target_compile_options(${_name} PRIVATE ${VU_WARNING_FLAGS})
+  set_target_properties(${_name} PROPERTIES VERSION ${PROJECT_VERSION} SOVERSION ${PROJECT_VERSION_MAJOR})
+endfunction()
+
+option(BUILD_TESTING "Build the module's tests" ON)
+option(VirtualUnwrapping_BUILD_EXAMPLES "Build the command-line tools in examples/" ON)
+option(VirtualUnwrapping_BUILD_BENCHMARKS "Build the benchmark programs in benchmarks/" ON)
+
+add_subdirectory(src)
+
+if(BUILD_TESTING)
+  enable_testing()
+  add_subdirectory(test)
+endif()
+if(VirtualUnwrapping_BUILD_EXAMPLES)
+  add_subdirectory(examples)
+endif()
+if(VirtualUnwrapping_BUILD_BENCHMARKS)
+  add_subdirectory(benchmarks)
+endif()
+
+# Package configuration so that other projects can find_package(VirtualUnwrapping),
+# from this build tree or from an installation.
+include(CMakePackageConfigHelpers)
+include(GNUInstallDirs)
+install(TARGETS VirtualUnwrapping EXPORT VirtualUnwrappingTargets
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+install(DIRECTORY include/ DESTINATION include/VirtualUnwrapping)
+install(EXPORT VirtualUnwrappingTargets NAMESPACE VirtualUnwrapping::
+  DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/VirtualUnwrapping)
+export(EXPORT VirtualUnwrappingTargets NAMESPACE VirtualUnwrapping::
+  FILE ${PROJECT_BINARY_DIR}/VirtualUnwrappingTargets.cmake)
+configure_package_config_file(cmake/VirtualUnwrappingConfig.cmake.in
+  ${PROJECT_BINARY_DIR}/VirtualUnwrappingConfig.cmake
+  INSTALL_DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/VirtualUnwrapping)
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/VirtualUnwrappingConfigVersion.cmake
+  COMPATIBILITY SameMajorVersion)
+install(FILES ${PROJECT_BINARY_DIR}/VirtualUnwrappingConfig.cmake
+  ${PROJECT_BINARY_DIR}/VirtualUnwrappingConfigVersion.cmake
+  DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/VirtualUnwrapping)

@@ -1,0 +1,108 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// virtual-unwrap: the module's command-line tool. Each subcommand lives in its own
+// vuCommand*.cxx; this file only dispatches and turns failures into one-line errors.
+#include "vuCommands.h"
+
+#include "itkMacro.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+namespace vu {
+void
+WriteTextFileAtomically(const std::string & path, const std::string & text)
+{
+  const std::string temporary = path + ".partial";
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.close();
+    if (!out)
+    {
+      std::remove(temporary.c_str());
+      throw UsageError("cannot write " + path);
+    }
+  }
+  std::filesystem::rename(temporary, path);
+}
+
+void
+EmitJson(const nlohmann::json & json, const std::string & path)
+{
+  if (path.empty())
+  {
+    std::cout << json.dump(2) << std::endl;
+  }
+  else
+  {
+    WriteTextFileAtomically(path, json.dump(2) + "\n");
+  }
+}
+} // namespace vu
+
+namespace {
+// ITK's exception text spans several lines (location, file, description): keep the
+// description, which says what went wrong.
+std::string
+OneLine(std::string text)
+{
+  for (char & c : text)
+  {
+    if (c == '\n' || c == '\r')
+    {
+      c = ' ';
+    }
+  }
+  return text;
+}
+} // namespace
+
+int
+main(int argc, char * argv[])
+{
+  CLI::App app{ "virtual-unwrap: read a CT scan of a rolled or folded document, find the writing surface, "
+                "unroll and flatten it by mass-spring simulation, and render a flat, readable image.",
+                "virtual-unwrap" };
+  app.set_version_flag("--version", "virtual-unwrap 0.1.0 (VirtualUnwrapping ITK module)");
+  app.require_subcommand(1);
+  app.get_formatter()->column_width(42);
+  vu::RegisterDistortionCommand(app);
+
+  try
+  {
+    app.parse(argc, argv);
+  }
+  catch (const CLI::ParseError & e)
+  {
+    return app.exit(e);
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    std::cerr << "virtual-unwrap: error: " << OneLine(e.GetDescription()) << std::endl;
+    return 1;
+  }
+  catch (const std::exception & e)
+  {
+    std::cerr << "virtual-unwrap: error: " << OneLine(e.what()) << std::endl;
+    return 1;
+  }
+  return 0;
+}

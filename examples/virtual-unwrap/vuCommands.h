@@ -1,0 +1,50 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef vuCommands_h
+#define vuCommands_h
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <stdexcept>
+#include <string>
+
+namespace vu {
+/** A failure the user can act on: printed as one line, exit code 1. */
+class UsageError : public std::runtime_error
+{
+public:
+  using std::runtime_error::runtime_error;
+};
+
+/** Each subcommand adds itself to the application; its callback does the work and
+ * throws (itk::ExceptionObject, vu::UsageError or std::exception) on failure. */
+void
+RegisterDistortionCommand(CLI::App & app);
+
+/** Writes text to path atomically: to a temporary name beside it, then renamed, so a
+ * failure never leaves a half-written file. */
+void
+WriteTextFileAtomically(const std::string & path, const std::string & text);
+
+/** Pretty JSON to standard output or, when path is not empty, to a file (atomically). */
+void
+EmitJson(const nlohmann::json & json, const std::string & path);
+} // namespace vu
+
+#endif

@@ -1,0 +1,86 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkSheetMesh_h
+#define itkSheetMesh_h
+
+#include "VirtualUnwrappingExport.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace itk {
+/** \class SheetMesh
+ * \brief Plain arrays of a triangle mesh of one sheet: the common currency of the
+ * simulation engine, the distortion metrics, the texture sampler and the benchmarks.
+ *
+ * Points are stored as x, y, z triples (physical units, mm), triangles as three point
+ * indices each. When the mesh comes from a grid (rows along the roll axis, columns along
+ * the sheet), GridIndex holds (row, column) per point and GridRows / GridColumns the grid
+ * size; otherwise GridIndex is empty. Kept free of ITK's mesh headers so that the
+ * non-templated numerics compile quickly; itkSheetMeshAdaptor.h converts to and from
+ * itk::Mesh and itk::QuadEdgeMesh.
+ *
+ * \ingroup VirtualUnwrapping
+ */
+struct VirtualUnwrapping_EXPORT SheetMesh
+{
+  std::vector<double>   Points;
+  std::vector<uint32_t> Triangles;
+  std::vector<int32_t>  GridIndex;
+  int32_t               GridRows{ 0 };
+  int32_t               GridColumns{ 0 };
+
+  size_t
+  GetNumberOfPoints() const
+  {
+    return Points.size() / 3;
+  }
+  size_t
+  GetNumberOfTriangles() const
+  {
+    return Triangles.size() / 3;
+  }
+  bool
+  IsGridStructured() const
+  {
+    return !GridIndex.empty() && GridIndex.size() == 2 * GetNumberOfPoints();
+  }
+
+  /** Throws itk::ExceptionObject naming the problem when the arrays are inconsistent:
+   * sizes not multiples of three, a triangle index out of range, a triangle that repeats
+   * a point, or a non-finite coordinate. */
+  void
+  Validate(const std::string & what) const;
+
+  /** Unique undirected edges (i < j), sorted; two entries per edge. */
+  std::vector<uint32_t>
+  ComputeEdges() const;
+
+  /** Area of each triangle. */
+  std::vector<double>
+  ComputeTriangleAreas() const;
+};
+
+/** True when both meshes have the same number of points and identical triangles. */
+VirtualUnwrapping_EXPORT bool
+HaveSameTopology(const SheetMesh & a, const SheetMesh & b);
+
+} // end namespace itk
+
+#endif

@@ -1,0 +1,120 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkSheetMesh.h"
+
+#include "itkMacro.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace itk {
+void
+SheetMesh::Validate(const std::string & what) const
+{
+  if (Points.size() % 3 != 0)
+  {
+    itkGenericExceptionMacro(<< what << ": point array size " << Points.size() << " is not a multiple of 3");
+  }
+  if (Triangles.size() % 3 != 0)
+  {
+    itkGenericExceptionMacro(<< what << ": triangle array size " << Triangles.size() << " is not a multiple of 3");
+  }
+  if (Triangles.empty())
+  {
+    itkGenericExceptionMacro(<< what << ": mesh has no triangles");
+  }
+  const size_t n = GetNumberOfPoints();
+  for (size_t k = 0; k < Points.size(); ++k)
+  {
+    if (!std::isfinite(Points[k]))
+    {
+      itkGenericExceptionMacro(<< what << ": point " << k / 3 << " has a non-finite coordinate");
+    }
+  }
+  for (size_t t = 0; t < GetNumberOfTriangles(); ++t)
+  {
+    const uint32_t a = Triangles[3 * t], b = Triangles[3 * t + 1], c = Triangles[3 * t + 2];
+    if (a >= n || b >= n || c >= n)
+    {
+      itkGenericExceptionMacro(<< what << ": triangle " << t << " refers to a point beyond the " << n << " points");
+    }
+    if (a == b || b == c || a == c)
+    {
+      itkGenericExceptionMacro(<< what << ": triangle " << t << " repeats a point");
+    }
+  }
+  if (!GridIndex.empty() && GridIndex.size() != 2 * n)
+  {
+    itkGenericExceptionMacro(<< what << ": grid index has " << GridIndex.size() / 2 << " entries for " << n
+                             << " points");
+  }
+}
+
+std::vector<uint32_t>
+SheetMesh::ComputeEdges() const
+{
+  std::vector<uint64_t> keys;
+  keys.reserve(Triangles.size());
+  for (size_t t = 0; t < GetNumberOfTriangles(); ++t)
+  {
+    for (int e = 0; e < 3; ++e)
+    {
+      uint64_t a = Triangles[3 * t + e];
+      uint64_t b = Triangles[3 * t + (e + 1) % 3];
+      if (a > b)
+      {
+        std::swap(a, b);
+      }
+      keys.push_back((a << 32) | b);
+    }
+  }
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  std::vector<uint32_t> edges(2 * keys.size());
+  for (size_t k = 0; k < keys.size(); ++k)
+  {
+    edges[2 * k] = static_cast<uint32_t>(keys[k] >> 32);
+    edges[2 * k + 1] = static_cast<uint32_t>(keys[k] & 0xffffffffu);
+  }
+  return edges;
+}
+
+std::vector<double>
+SheetMesh::ComputeTriangleAreas() const
+{
+  std::vector<double> areas(GetNumberOfTriangles());
+  for (size_t t = 0; t < areas.size(); ++t)
+  {
+    const double * p = &Points[3 * Triangles[3 * t]];
+    const double * q = &Points[3 * Triangles[3 * t + 1]];
+    const double * r = &Points[3 * Triangles[3 * t + 2]];
+    const double   u[3] = { q[0] - p[0], q[1] - p[1], q[2] - p[2] };
+    const double   v[3] = { r[0] - p[0], r[1] - p[1], r[2] - p[2] };
+    const double   c[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0] };
+    areas[t] = 0.5 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+  }
+  return areas;
+}
+
+bool
+HaveSameTopology(const SheetMesh & a, const SheetMesh & b)
+{
+  return a.GetNumberOfPoints() == b.GetNumberOfPoints() && a.Triangles == b.Triangles;
+}
+
+} // end namespace itk

@@ -1,0 +1,38 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef vuTestHelpers_h
+#define vuTestHelpers_h
+
+#include "itkTestingMacros.h"
+
+#include "gtest/gtest.h"
+
+#include <cstdlib>
+
+/** ITK's testing macros (ITK_EXERCISE_BASIC_OBJECT_METHODS, ITK_TEST_SET_GET_VALUE,
+ * ITK_TRY_EXPECT_EXCEPTION, ...) report failure by returning EXIT_FAILURE from the
+ * enclosing function; a GoogleTest body returns void, so run them in a lambda. */
+#define VU_EXPECT_ITK_MACROS(...)                                                                                      \
+  EXPECT_EQ(                                                                                                           \
+    [&]() -> int {                                                                                                     \
+      __VA_ARGS__;                                                                                                     \
+      return EXIT_SUCCESS;                                                                                             \
+    }(),                                                                                                               \
+    EXIT_SUCCESS)
+
+#endif
