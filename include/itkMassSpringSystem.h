@@ -69,7 +69,8 @@ public:
  * F = F_springs + F_damping + m G; state [X, V] with X' = V, V' = F / m. Locked particles
  * keep their position (a constraint force cancels whatever acts on them, so it does no
  * work). An optional collision plane (point P, unit normal N) reflects particles that
- * cross it: V_new = V_old - (1 + k_r)(V_old . N) N, restitution k_r in [0, 1].
+ * cross it: V_new = V_old - (1 + k_r)(V_old . N) N, restitution k_r in [0, 1]; a rebound
+ * slower than twice what gravity adds in one step ends in resting contact (k_r = 0).
  *
  * Damping: viscous drag -c m V on every particle (GetDamping, 1/s, >= 0) and spring
  * damping along each spring, c_s ((V_j - V_i) . d) d / |d|^2 scaled by the spring's
@@ -253,6 +254,13 @@ public:
   void
   Step();
 
+  /** Quasi-static relaxation: local/global iterations of the implicit solver without
+   * inertia (each minimises the spring energy around the current positions, regularised
+   * by M / h^2 with the current time step), velocities zeroed. For the final relaxation of
+   * a flattened sheet; gravity and the plane apply as in Step(). */
+  void
+  Relax(unsigned int iterations);
+
   /** Steps taken since SetParticles(). */
   uint64_t
   GetNumberOfSteps() const
@@ -317,7 +325,7 @@ private:
   void
   StepExplicit();
   void
-  StepImplicit();
+  StepImplicit(bool quasiStatic);
   void
   ParallelFor(size_t n, const std::function<void(size_t, size_t)> & body);
   double

@@ -416,6 +416,10 @@ MassSpringSystem::ApplyConstraintsAndCollisions(double * x, double * v) const
     return;
   }
   const Vector3 & N = m_PlaneNormal;
+  // Resting contact: a rebound slower than what gravity adds in two steps would only start
+  // an endless micro-bounce, so such particles come to rest on the plane.
+  const double restingSpeed =
+    2.0 * m_TimeStep * std::abs(m_Gravity[0] * N[0] + m_Gravity[1] * N[1] + m_Gravity[2] * N[2]);
   for (size_t i = 0; i < n; ++i)
   {
     double *     xi = x + 3 * i;
@@ -432,9 +436,10 @@ MassSpringSystem::ApplyConstraintsAndCollisions(double * x, double * v) const
       if (vn < 0.0)
       {
         // The paper's collision response: V_new = V_old - (1 + k_r)(V_old . N) N.
+        const double rebound = -m_Restitution * vn <= restingSpeed ? 0.0 : m_Restitution;
         for (int d = 0; d < 3; ++d)
         {
-          vi[d] -= (1.0 + m_Restitution) * vn * N[d];
+          vi[d] -= (1.0 + rebound) * vn * N[d];
         }
       }
     }
@@ -532,7 +537,7 @@ MassSpringSystem::StepExplicit()
 }
 
 void
-MassSpringSystem::StepImplicit()
+MassSpringSystem::StepImplicit(bool quasiStatic)
 {
   using SparseMatrix = ImplicitSolver::SparseMatrix;
   if (!m_AdjacencyValid)
@@ -658,12 +663,40 @@ MassSpringSystem::StepImplicit()
     }
     ++m_ForceEvaluations;
   }
-  const double invH = 1.0 / h;
+  const double invH = quasiStatic ? 0.0 : 1.0 / h;
   for (size_t k = 0; k < m_X.size(); ++k)
   {
     m_V[k] = (m_X[k] - xPrevious[k]) * invH;
   }
   ApplyConstraintsAndCollisions(m_X.data(), m_V.data());
+}
+
+void
+MassSpringSystem::Relax(unsigned int iterations)
+{
+  if (m_Masses.empty())
+  {
+    itkGenericExceptionMacro(<< "MassSpringSystem: no particles");
+  }
+  const unsigned int saved = m_ImplicitIterations;
+  m_ImplicitIterations = iterations;
+  try
+  {
+    StepImplicit(true);
+  }
+  catch (...)
+  {
+    m_ImplicitIterations = saved;
+    throw;
+  }
+  m_ImplicitIterations = saved;
+  for (double c : m_X)
+  {
+    if (!std::isfinite(c))
+    {
+      throw MassSpringDivergenceError("mass-spring relaxation diverged (non-finite state) with " + Describe());
+    }
+  }
 }
 
 double
@@ -754,8 +787,9 @@ MassSpringSystem::ComputeRelativeResidualForce()
   std::vector<double> zero(m_V.size(), 0.0), a(m_V.size());
   Accelerations(m_X.data(), zero.data(), a.data());
   --m_ForceEvaluations; // an analysis, not a simulation step
-  double sum = 0.0;
-  size_t count = 0;
+  double       sum = 0.0;
+  size_t       count = 0;
+  const double contactDepth = 1e-9 * GetMeanRestLength();
   for (size_t i = 0; i < m_Masses.size(); ++i)
   {
     if (m_Locked[i])
@@ -770,7 +804,7 @@ MassSpringSystem::ComputeRelativeResidualForce()
                            (x[2] - m_PlanePoint[2]) * m_PlaneNormal[2];
       const double fn = f[0] * m_PlaneNormal[0] + f[1] * m_PlaneNormal[1] + f[2] * m_PlaneNormal[2];
       // The plane carries what pushes a resting particle into it.
-      if (depth <= 1e-9 * GetMeanRestLength() && fn < 0.0)
+      if (depth <= contactDepth && fn < 0.0)
       {
         for (int d = 0; d < 3; ++d)
         {
@@ -862,7 +896,7 @@ MassSpringSystem::Step()
   }
   if (m_Integrator == MassSpringIntegratorEnum::ImplicitEuler)
   {
-    StepImplicit();
+    StepImplicit(false);
   }
   else
   {

@@ -1,0 +1,865 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkMassSpringSheetFlattener.h"
+
+#include "itkMacro.h"
+#include "itk_eigen.h"
+#include ITK_EIGEN(Dense)
+#include ITK_EIGEN(Sparse)
+#include ITK_EIGEN(SparseCholesky)
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <unordered_set>
+
+namespace itk {
+const char *
+ToString(SheetLockedEdgeEnum edge)
+{
+  switch (edge)
+  {
+    case SheetLockedEdgeEnum::None:
+      return "none";
+    case SheetLockedEdgeEnum::OuterEdge:
+      return "outer";
+    case SheetLockedEdgeEnum::InnerEdge:
+      return "inner";
+    case SheetLockedEdgeEnum::Custom:
+      return "custom";
+  }
+  return "unknown";
+}
+
+SheetLockedEdgeEnum
+SheetLockedEdgeFromString(const std::string & name)
+{
+  for (auto e : { SheetLockedEdgeEnum::None,
+                  SheetLockedEdgeEnum::OuterEdge,
+                  SheetLockedEdgeEnum::InnerEdge,
+                  SheetLockedEdgeEnum::Custom })
+  {
+    if (name == ToString(e))
+    {
+      return e;
+    }
+  }
+  throw std::invalid_argument("unknown locked edge '" + name + "' (none, outer, inner, custom)");
+}
+
+namespace {
+using Clock = std::chrono::steady_clock;
+using Vec3 = Eigen::Vector3d;
+
+double
+Seconds(Clock::time_point since)
+{
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+Vec3
+PointOf(const std::vector<double> & x, size_t i)
+{
+  return Vec3(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+}
+
+// Dense (row, column) -> point lookup of a grid-structured mesh; -1 where no point.
+std::vector<int64_t>
+GridLookup(const SheetMesh & mesh)
+{
+  std::vector<int64_t> lookup(static_cast<size_t>(mesh.GridRows) * mesh.GridColumns, -1);
+  for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    const int32_t r = mesh.GridIndex[2 * i], c = mesh.GridIndex[2 * i + 1];
+    if (r < 0 || c < 0 || r >= mesh.GridRows || c >= mesh.GridColumns)
+    {
+      itkGenericExceptionMacro(<< "sheet mesh: grid index (" << r << ", " << c << ") of point " << i
+                               << " lies outside the " << mesh.GridRows << " x " << mesh.GridColumns << " grid");
+    }
+    lookup[static_cast<size_t>(r) * mesh.GridColumns + c] = static_cast<int64_t>(i);
+  }
+  return lookup;
+}
+
+uint64_t
+EdgeKey(uint32_t a, uint32_t b)
+{
+  return a < b ? (uint64_t{ a } << 32) | b : (uint64_t{ b } << 32) | a;
+}
+
+// Principal axes of a point cloud: columns sorted by decreasing variance.
+Eigen::Matrix3d
+PrincipalAxes(const std::vector<double> & x, Vec3 & centroid)
+{
+  const size_t n = x.size() / 3;
+  centroid.setZero();
+  for (size_t i = 0; i < n; ++i)
+  {
+    centroid += PointOf(x, i);
+  }
+  centroid /= static_cast<double>(n);
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < n; ++i)
+  {
+    const Vec3 d = PointOf(x, i) - centroid;
+    covariance += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
+  Eigen::Matrix3d                                axes;
+  for (int k = 0; k < 3; ++k)
+  {
+    axes.col(k) = eigen.eigenvectors().col(2 - k);
+  }
+  return axes;
+}
+} // namespace
+
+void
+MassSpringSheetFlattener::BuildSystem(const SheetMesh &                      mesh,
+                                      const MassSpringFlatteningParameters & parameters,
+                                      MassSpringSystem &                     system)
+{
+  mesh.Validate("mass-spring sheet");
+  if (!(parameters.Stiffness > 0.0) || !(parameters.Density > 0.0) || parameters.ShearStiffnessRatio < 0.0 ||
+      parameters.BendingStiffnessRatio < 0.0)
+  {
+    itkGenericExceptionMacro(<< "mass-spring sheet: stiffness and density must be positive and stiffness ratios "
+                             << "non-negative");
+  }
+  const size_t              n = mesh.GetNumberOfPoints();
+  const std::vector<double> areas = mesh.ComputeTriangleAreas();
+  std::vector<double>       masses(n, 0.0);
+  for (size_t t = 0; t < areas.size(); ++t)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      masses[mesh.Triangles[3 * t + c]] += parameters.Density * areas[t] / 3.0;
+    }
+  }
+  for (size_t i = 0; i < n; ++i)
+  {
+    if (!(masses[i] > 0.0))
+    {
+      itkGenericExceptionMacro(<< "mass-spring sheet: point " << i
+                               << " belongs to no triangle of non-zero area (degenerate mesh)");
+    }
+  }
+  system.SetParticles(mesh.Points, masses);
+
+  const std::vector<uint32_t> edges = mesh.ComputeEdges();
+  auto   length = [&](uint32_t a, uint32_t b) { return (PointOf(mesh.Points, a) - PointOf(mesh.Points, b)).norm(); };
+  double meanLength = 0.0;
+  for (size_t e = 0; e < edges.size(); e += 2)
+  {
+    const double L = length(edges[e], edges[e + 1]);
+    if (!(L > 0.0))
+    {
+      itkGenericExceptionMacro(<< "mass-spring sheet: edge (" << edges[e] << ", " << edges[e + 1]
+                               << ") has zero length (degenerate mesh)");
+    }
+    meanLength += L;
+  }
+  meanLength /= static_cast<double>(edges.size() / 2);
+  auto addSpring = [&](uint32_t a, uint32_t b, double ratio) {
+    const double L = length(a, b);
+    if (L > 0.0)
+    {
+      system.AddSpring(a, b, L, ratio * parameters.Stiffness * meanLength / L);
+    }
+  };
+  for (size_t e = 0; e < edges.size(); e += 2)
+  {
+    addSpring(edges[e], edges[e + 1], 1.0);
+  }
+
+  std::unordered_set<uint64_t> edgeSet;
+  edgeSet.reserve(edges.size());
+  for (size_t e = 0; e < edges.size(); e += 2)
+  {
+    edgeSet.insert(EdgeKey(edges[e], edges[e + 1]));
+  }
+  if (mesh.IsGridStructured())
+  {
+    const std::vector<int64_t> lookup = GridLookup(mesh);
+    auto                       at = [&](int32_t r, int32_t c) -> int64_t {
+      return r < mesh.GridRows && c < mesh.GridColumns ? lookup[static_cast<size_t>(r) * mesh.GridColumns + c] : -1;
+    };
+    for (int32_t r = 0; r < mesh.GridRows; ++r)
+    {
+      for (int32_t c = 0; c < mesh.GridColumns; ++c)
+      {
+        const int64_t p00 = at(r, c), p01 = at(r, c + 1), p10 = at(r + 1, c), p11 = at(r + 1, c + 1);
+        if (parameters.ShearStiffnessRatio > 0.0 && p00 >= 0 && p01 >= 0 && p10 >= 0 && p11 >= 0)
+        {
+          // Shear: whichever quad diagonal the triangulation did not use.
+          for (auto [a, b] : { std::pair<int64_t, int64_t>{ p00, p11 }, { p01, p10 } })
+          {
+            if (!edgeSet.count(EdgeKey(static_cast<uint32_t>(a), static_cast<uint32_t>(b))))
+            {
+              addSpring(static_cast<uint32_t>(a), static_cast<uint32_t>(b), parameters.ShearStiffnessRatio);
+            }
+          }
+        }
+        if (parameters.BendingStiffnessRatio > 0.0 && p00 >= 0)
+        {
+          for (int64_t q : { at(r, c + 2), at(r + 2, c) })
+          {
+            if (q >= 0)
+            {
+              addSpring(static_cast<uint32_t>(p00), static_cast<uint32_t>(q), parameters.BendingStiffnessRatio);
+            }
+          }
+        }
+      }
+    }
+  }
+  else if (parameters.ShearStiffnessRatio > 0.0)
+  {
+    // Shear: join the two points opposite each interior edge.
+    std::vector<std::pair<uint64_t, uint32_t>> opposite;
+    opposite.reserve(mesh.Triangles.size());
+    for (size_t t = 0; t < mesh.GetNumberOfTriangles(); ++t)
+    {
+      for (int e = 0; e < 3; ++e)
+      {
+        opposite.emplace_back(EdgeKey(mesh.Triangles[3 * t + e], mesh.Triangles[3 * t + (e + 1) % 3]),
+                              mesh.Triangles[3 * t + (e + 2) % 3]);
+      }
+    }
+    std::sort(opposite.begin(), opposite.end());
+    std::unordered_set<uint64_t> added;
+    for (size_t k = 0; k + 1 < opposite.size(); ++k)
+    {
+      if (opposite[k].first == opposite[k + 1].first && opposite[k].second != opposite[k + 1].second)
+      {
+        const uint64_t key = EdgeKey(opposite[k].second, opposite[k + 1].second);
+        if (!edgeSet.count(key) && added.insert(key).second)
+        {
+          addSpring(opposite[k].second, opposite[k + 1].second, parameters.ShearStiffnessRatio);
+        }
+      }
+    }
+  }
+  system.SetNumberOfWorkUnits(parameters.NumberOfWorkUnits);
+}
+
+namespace {
+// Runs one phase until converged or at the step limit; records it in the report.
+MassSpringFlatteningReport::Phase
+RunPhase(MassSpringSystem &                             system,
+         const std::string &                            name,
+         const MassSpringFlatteningParameters &         parameters,
+         const MassSpringSheetFlattener::StepCallback & callback)
+{
+  MassSpringFlatteningReport::Phase phase;
+  phase.Name = name;
+  phase.Integrator = ToString(system.GetIntegrator());
+  phase.TimeStep = system.GetTimeStep();
+  phase.StopReason = "step limit";
+  const auto   start = Clock::now();
+  const size_t checkEvery = 10;
+  for (uint64_t step = 1; step <= parameters.MaximumStepsPerPhase; ++step)
+  {
+    system.Step();
+    phase.Steps = step;
+    if (callback && !callback(system, name, step))
+    {
+      itkGenericExceptionMacro(<< "mass-spring flattening aborted during the " << name << " phase at step " << step);
+    }
+    if (step % checkEvery == 0)
+    {
+      phase.RelativeKineticEnergy = system.ComputeRelativeKineticEnergy();
+      if (phase.RelativeKineticEnergy < parameters.KineticEnergyTolerance)
+      {
+        phase.RelativeResidualForce = system.ComputeRelativeResidualForce();
+        if (phase.RelativeResidualForce < parameters.ResidualForceTolerance)
+        {
+          phase.StopReason = "converged";
+          break;
+        }
+      }
+    }
+  }
+  phase.RelativeKineticEnergy = system.ComputeRelativeKineticEnergy();
+  phase.RelativeResidualForce = system.ComputeRelativeResidualForce();
+  phase.Seconds = Seconds(start);
+  return phase;
+}
+
+// Quasi-static relaxation on the plane z = 0 until the residual force is small.
+MassSpringFlatteningReport::Phase
+RunRelaxation(MassSpringSystem &                             system,
+              const MassSpringFlatteningParameters &         parameters,
+              const MassSpringSheetFlattener::StepCallback & callback)
+{
+  MassSpringFlatteningReport::Phase phase;
+  phase.Name = "relax";
+  phase.Integrator = "quasi-static";
+  phase.StopReason = "step limit";
+  const auto start = Clock::now();
+  system.SetGravity({ 0.0, 0.0, 0.0 });
+  system.UnlockAll();
+  system.SetCollisionPlane({ 0.0, 0.0, 0.0 }, { 0.0, 0.0, 1.0 }, parameters.Restitution);
+  // Regularise the singular spring Laplacian by M / h^2 at (w h) = 1e3: 1e-6 of the springs.
+  const double w = std::sqrt(system.GetMeanStiffness() / system.GetMeanMass());
+  system.SetTimeStep(1e3 / w);
+  phase.TimeStep = system.GetTimeStep();
+  const unsigned int batch = 5;
+  for (uint64_t done = 0; done < parameters.RelaxationIterations; done += batch)
+  {
+    system.Relax(batch);
+    phase.Steps = done + batch;
+    if (callback && !callback(system, "relax", phase.Steps))
+    {
+      itkGenericExceptionMacro(<< "mass-spring flattening aborted during the relax phase");
+    }
+    phase.RelativeResidualForce = system.ComputeRelativeResidualForce();
+    if (phase.RelativeResidualForce < parameters.RelaxationTolerance)
+    {
+      phase.StopReason = "converged";
+      break;
+    }
+  }
+  phase.Seconds = Seconds(start);
+  return phase;
+}
+
+// Lays the particles on the plane through 'origin' with in-plane axes u, v: z = 0.
+std::vector<double>
+ToPlane(const std::vector<double> & x, const Vec3 & origin, const Vec3 & u, const Vec3 & v)
+{
+  std::vector<double> planar(x.size());
+  for (size_t i = 0; i < x.size() / 3; ++i)
+  {
+    const Vec3 d = PointOf(x, i) - origin;
+    planar[3 * i] = d.dot(u);
+    planar[3 * i + 1] = d.dot(v);
+    planar[3 * i + 2] = 0.0;
+  }
+  return planar;
+}
+
+// Final frame of a flat mesh: x along the longest extent, triangles counter-clockwise,
+// bounding box from (0, 0).
+void
+NormaliseFlatFrame(SheetMesh & flat)
+{
+  Vec3                  centroid;
+  const Eigen::Matrix3d axes = PrincipalAxes(flat.Points, centroid);
+  Vec3                  u = axes.col(0);
+  u.z() = 0.0;
+  if (u.norm() < 1e-12)
+  {
+    u = Vec3::UnitX();
+  }
+  u.normalize();
+  Vec3                v(-u.y(), u.x(), 0.0);
+  std::vector<double> p = ToPlane(flat.Points, centroid, u, v);
+  double              signedArea = 0.0;
+  for (size_t t = 0; t < flat.GetNumberOfTriangles(); ++t)
+  {
+    const double * a = &p[3 * flat.Triangles[3 * t]];
+    const double * b = &p[3 * flat.Triangles[3 * t + 1]];
+    const double * c = &p[3 * flat.Triangles[3 * t + 2]];
+    signedArea += (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+  }
+  if (signedArea < 0.0)
+  {
+    for (size_t i = 0; i < p.size() / 3; ++i)
+    {
+      p[3 * i + 1] = -p[3 * i + 1];
+    }
+  }
+  double lo[2] = { std::numeric_limits<double>::max(), std::numeric_limits<double>::max() };
+  for (size_t i = 0; i < p.size() / 3; ++i)
+  {
+    lo[0] = std::min(lo[0], p[3 * i]);
+    lo[1] = std::min(lo[1], p[3 * i + 1]);
+  }
+  for (size_t i = 0; i < p.size() / 3; ++i)
+  {
+    p[3 * i] -= lo[0];
+    p[3 * i + 1] -= lo[1];
+  }
+  flat.Points = std::move(p);
+}
+
+// The particles of a grid mesh held by the unroll phase: the end column of each row.
+std::vector<uint32_t>
+EdgeParticles(const SheetMesh & mesh, SheetLockedEdgeEnum edge)
+{
+  if (!mesh.IsGridStructured())
+  {
+    itkGenericExceptionMacro(<< "mass-spring flattening: locked edge '" << ToString(edge)
+                             << "' needs a grid-structured mesh; give the particles to lock instead");
+  }
+  // The first and last point of each row (increasing column).
+  std::vector<int64_t> first(mesh.GridRows, -1), last(mesh.GridRows, -1);
+  std::vector<int32_t> firstColumn(mesh.GridRows, std::numeric_limits<int32_t>::max()), lastColumn(mesh.GridRows, -1);
+  for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    const int32_t r = mesh.GridIndex[2 * i], c = mesh.GridIndex[2 * i + 1];
+    if (c < firstColumn[r])
+    {
+      firstColumn[r] = c;
+      first[r] = static_cast<int64_t>(i);
+    }
+    if (c > lastColumn[r])
+    {
+      lastColumn[r] = c;
+      last[r] = static_cast<int64_t>(i);
+    }
+  }
+  std::vector<uint32_t> starts, ends;
+  for (int32_t r = 0; r < mesh.GridRows; ++r)
+  {
+    if (first[r] >= 0)
+    {
+      starts.push_back(static_cast<uint32_t>(first[r]));
+      ends.push_back(static_cast<uint32_t>(last[r]));
+    }
+  }
+  // Outer: the end farther from the roll's axis, i.e. from the sheet's centroid line.
+  Vec3 centroid = Vec3::Zero();
+  for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    centroid += PointOf(mesh.Points, i);
+  }
+  centroid /= static_cast<double>(mesh.GetNumberOfPoints());
+  Vec3 axis = Vec3::Zero();
+  for (size_t k = 0; k + 1 < starts.size(); ++k)
+  {
+    axis += PointOf(mesh.Points, starts[k + 1]) - PointOf(mesh.Points, starts[k]);
+  }
+  axis = axis.norm() > 0.0 ? axis.normalized() : Vec3::UnitZ();
+  auto radial = [&](const std::vector<uint32_t> & ids) {
+    double sum = 0.0;
+    for (uint32_t id : ids)
+    {
+      const Vec3 d = PointOf(mesh.Points, id) - centroid;
+      sum += (d - d.dot(axis) * axis).norm();
+    }
+    return sum / static_cast<double>(ids.size());
+  };
+  const bool endIsOuter = radial(ends) >= radial(starts);
+  if (edge == SheetLockedEdgeEnum::OuterEdge)
+  {
+    return endIsOuter ? ends : starts;
+  }
+  return endIsOuter ? starts : ends;
+}
+
+// Every factor-th grid line and the last one.
+std::vector<int32_t>
+CoarseLevels(int32_t count, unsigned int factor)
+{
+  std::vector<int32_t> kept;
+  for (int32_t k = 0; k < count; k += static_cast<int32_t>(factor))
+  {
+    kept.push_back(k);
+  }
+  if (kept.back() != count - 1)
+  {
+    kept.push_back(count - 1);
+  }
+  return kept;
+}
+
+// Every n-th row and column of a grid mesh (and the last ones), as a grid mesh of its own.
+SheetMesh
+CoarseGrid(const SheetMesh & mesh, unsigned int factor, std::vector<uint32_t> & fineIds)
+{
+  const std::vector<int64_t> lookup = GridLookup(mesh);
+  const std::vector<int32_t> rows = CoarseLevels(mesh.GridRows, factor);
+  const std::vector<int32_t> columns = CoarseLevels(mesh.GridColumns, factor);
+  const auto                 R = static_cast<int32_t>(rows.size()), C = static_cast<int32_t>(columns.size());
+  auto                       fine = [&](int32_t r, int32_t c) {
+    return lookup[static_cast<size_t>(rows[r]) * mesh.GridColumns + columns[c]];
+  };
+  // Keep coarse points that belong to a complete coarse quad.
+  std::vector<int64_t> coarseId(static_cast<size_t>(R) * C, -1);
+  std::vector<uint8_t> used(static_cast<size_t>(R) * C, 0);
+  for (int32_t r = 0; r + 1 < R; ++r)
+  {
+    for (int32_t c = 0; c + 1 < C; ++c)
+    {
+      if (fine(r, c) >= 0 && fine(r, c + 1) >= 0 && fine(r + 1, c) >= 0 && fine(r + 1, c + 1) >= 0)
+      {
+        used[r * C + c] = used[r * C + c + 1] = used[(r + 1) * C + c] = used[(r + 1) * C + c + 1] = 1;
+      }
+    }
+  }
+  SheetMesh coarse;
+  coarse.GridRows = R;
+  coarse.GridColumns = C;
+  fineIds.clear();
+  for (int32_t r = 0; r < R; ++r)
+  {
+    for (int32_t c = 0; c < C; ++c)
+    {
+      if (used[r * C + c])
+      {
+        const auto f = static_cast<uint32_t>(fine(r, c));
+        coarseId[r * C + c] = static_cast<int64_t>(fineIds.size());
+        fineIds.push_back(f);
+        coarse.Points.insert(coarse.Points.end(), &mesh.Points[3 * f], &mesh.Points[3 * f] + 3);
+        coarse.GridIndex.insert(coarse.GridIndex.end(), { r, c });
+      }
+    }
+  }
+  // Triangulate each coarse quad with the orientation of the fine triangles there.
+  auto orientationAt = [&](uint32_t finePoint) {
+    // Sign of the fine triangle's (row, column) orientation that contains this point.
+    for (size_t t = 0; t < mesh.GetNumberOfTriangles(); ++t)
+    {
+      const uint32_t * tri = &mesh.Triangles[3 * t];
+      if (tri[0] == finePoint || tri[1] == finePoint || tri[2] == finePoint)
+      {
+        const int32_t * a = &mesh.GridIndex[2 * tri[0]];
+        const int32_t * b = &mesh.GridIndex[2 * tri[1]];
+        const int32_t * c = &mesh.GridIndex[2 * tri[2]];
+        return ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])) > 0 ? 1 : -1;
+      }
+    }
+    return 1;
+  };
+  const int orientation = orientationAt(fineIds.empty() ? 0 : fineIds[0]);
+  for (int32_t r = 0; r + 1 < R; ++r)
+  {
+    for (int32_t c = 0; c + 1 < C; ++c)
+    {
+      const int64_t a = coarseId[r * C + c], b = coarseId[r * C + c + 1], d = coarseId[(r + 1) * C + c],
+                    e = coarseId[(r + 1) * C + c + 1];
+      if (a < 0 || b < 0 || d < 0 || e < 0 || fine(r, c) < 0 || fine(r, c + 1) < 0 || fine(r + 1, c) < 0 ||
+          fine(r + 1, c + 1) < 0)
+      {
+        continue;
+      }
+      // In (row, column) coordinates (a, e, b) is counter-clockwise when orientation > 0.
+      const auto A = static_cast<uint32_t>(a), B = static_cast<uint32_t>(b), D = static_cast<uint32_t>(d),
+                 E = static_cast<uint32_t>(e);
+      if (orientation > 0)
+      {
+        coarse.Triangles.insert(coarse.Triangles.end(), { A, E, B, A, D, E });
+      }
+      else
+      {
+        coarse.Triangles.insert(coarse.Triangles.end(), { A, B, E, A, E, D });
+      }
+    }
+  }
+  return coarse;
+}
+
+// Carries flat positions of the coarse grid's points to every point of the fine grid:
+// bilinear in (row, column) inside complete coarse cells, harmonic (a sparse Laplace
+// solve with the known points fixed) elsewhere.
+std::vector<double>
+Prolong(const SheetMesh & mesh, const SheetMesh & coarse, unsigned int factor, const std::vector<double> & coarseFlat)
+{
+  const size_t               n = mesh.GetNumberOfPoints();
+  std::vector<double>        flat(3 * n, 0.0);
+  std::vector<uint8_t>       known(n, 0);
+  const auto                 R = coarse.GridRows, C = coarse.GridColumns;
+  const std::vector<int32_t> rowOf = CoarseLevels(mesh.GridRows, factor);
+  const std::vector<int32_t> columnOf = CoarseLevels(mesh.GridColumns, factor);
+  std::vector<int64_t>       coarseAt(static_cast<size_t>(R) * C, -1);
+  for (size_t k = 0; k < coarse.GetNumberOfPoints(); ++k)
+  {
+    coarseAt[static_cast<size_t>(coarse.GridIndex[2 * k]) * C + coarse.GridIndex[2 * k + 1]] = static_cast<int64_t>(k);
+  }
+  // Fine row/column -> the coarse level at or below it.
+  auto levelBelow = [](const std::vector<int32_t> & levels, int32_t v) {
+    return static_cast<int32_t>(std::upper_bound(levels.begin(), levels.end(), v) - levels.begin()) - 1;
+  };
+  for (size_t i = 0; i < n; ++i)
+  {
+    const int32_t r = mesh.GridIndex[2 * i], c = mesh.GridIndex[2 * i + 1];
+    const int32_t r0 = std::max(0, std::min(R - 2, levelBelow(rowOf, r)));
+    const int32_t c0 = std::max(0, std::min(C - 2, levelBelow(columnOf, c)));
+    const int64_t q00 = coarseAt[r0 * C + c0], q01 = coarseAt[r0 * C + c0 + 1], q10 = coarseAt[(r0 + 1) * C + c0],
+                  q11 = coarseAt[(r0 + 1) * C + c0 + 1];
+    if (q00 < 0 || q01 < 0 || q10 < 0 || q11 < 0)
+    {
+      continue;
+    }
+    const double tr = double(r - rowOf[r0]) / double(rowOf[r0 + 1] - rowOf[r0]);
+    const double tc = double(c - columnOf[c0]) / double(columnOf[c0 + 1] - columnOf[c0]);
+    if (tr < 0.0 || tr > 1.0 || tc < 0.0 || tc > 1.0)
+    {
+      continue;
+    }
+    for (int d = 0; d < 2; ++d)
+    {
+      flat[3 * i + d] = (1 - tr) * (1 - tc) * coarseFlat[3 * q00 + d] + (1 - tr) * tc * coarseFlat[3 * q01 + d] +
+                        tr * (1 - tc) * coarseFlat[3 * q10 + d] + tr * tc * coarseFlat[3 * q11 + d];
+    }
+    known[i] = 1;
+  }
+  std::vector<int64_t> unknownIndex(n, -1);
+  Eigen::Index         unknowns = 0;
+  for (size_t i = 0; i < n; ++i)
+  {
+    if (!known[i])
+    {
+      unknownIndex[i] = unknowns++;
+    }
+  }
+  if (unknowns == 0)
+  {
+    return flat;
+  }
+  if (unknowns == static_cast<Eigen::Index>(n))
+  {
+    itkGenericExceptionMacro(<< "mass-spring flattening: the coarse grid covers no cell of the mesh");
+  }
+  const std::vector<uint32_t>         edges = mesh.ComputeEdges();
+  std::vector<Eigen::Triplet<double>> triplets;
+  Eigen::MatrixXd                     rhs = Eigen::MatrixXd::Zero(unknowns, 2);
+  for (size_t e = 0; e < edges.size(); e += 2)
+  {
+    const uint32_t a = edges[e], b = edges[e + 1];
+    for (auto [p, q] : { std::pair<uint32_t, uint32_t>{ a, b }, { b, a } })
+    {
+      if (unknownIndex[p] < 0)
+      {
+        continue;
+      }
+      triplets.emplace_back(unknownIndex[p], unknownIndex[p], 1.0);
+      if (unknownIndex[q] >= 0)
+      {
+        triplets.emplace_back(unknownIndex[p], unknownIndex[q], -1.0);
+      }
+      else
+      {
+        rhs(unknownIndex[p], 0) += flat[3 * q];
+        rhs(unknownIndex[p], 1) += flat[3 * q + 1];
+      }
+    }
+  }
+  Eigen::SparseMatrix<double> L(unknowns, unknowns);
+  L.setFromTriplets(triplets.begin(), triplets.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(L);
+  if (ldlt.info() != Eigen::Success)
+  {
+    itkGenericExceptionMacro(<< "mass-spring flattening: part of the mesh is not connected to the coarse grid");
+  }
+  const Eigen::MatrixXd solution = ldlt.solve(rhs);
+  for (size_t i = 0; i < n; ++i)
+  {
+    if (unknownIndex[i] >= 0)
+    {
+      flat[3 * i] = solution(unknownIndex[i], 0);
+      flat[3 * i + 1] = solution(unknownIndex[i], 1);
+    }
+  }
+  return flat;
+}
+} // namespace
+
+SheetMesh
+MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
+{
+  const auto start = Clock::now();
+  surface.Validate("mass-spring flattening input");
+  m_Report = MassSpringFlatteningReport();
+  const MassSpringFlatteningParameters & p = m_Parameters;
+  if (!(p.Restitution >= 0.0 && p.Restitution <= 1.0) || !(p.TimeStep >= 0.0) || !(p.TimeStepSafety > 0.0) ||
+      !(p.Gravity >= 0.0) || !(p.HangingStrain > 0.0) || p.MaximumStepsPerPhase == 0 || !(p.SpringDamping >= 0.0))
+  {
+    itkGenericExceptionMacro(<< "mass-spring flattening: impossible parameters (restitution in [0, 1], time step >= 0, "
+                             << "gravity >= 0, hanging strain > 0, step limit >= 1, spring damping >= 0)");
+  }
+  const size_t n = surface.GetNumberOfPoints();
+  m_Report.Particles = n;
+
+  // The level that is simulated: the full mesh or a coarser grid.
+  unsigned int factor = 1;
+  if (surface.IsGridStructured())
+  {
+    factor =
+      p.CoarseningFactor > 0
+        ? p.CoarseningFactor
+        : std::max(1u, static_cast<unsigned int>(std::ceil(std::sqrt(double(n) / std::max(1u, p.CoarseParticles)))));
+  }
+  std::vector<uint32_t> fineIds;
+  SheetMesh             simulated = factor > 1 ? CoarseGrid(surface, factor, fineIds) : surface;
+  if (factor > 1 && simulated.GetNumberOfTriangles() == 0)
+  {
+    factor = 1;
+    simulated = surface;
+  }
+  m_Report.CoarseningFactor = factor;
+  m_Report.SimulatedParticles = simulated.GetNumberOfPoints();
+
+  // Held particles, in the simulated level's numbering.
+  std::vector<uint32_t> locked;
+  if (p.LockedEdge == SheetLockedEdgeEnum::Custom)
+  {
+    for (uint32_t id : p.LockedParticles)
+    {
+      if (id >= n)
+      {
+        itkGenericExceptionMacro(<< "mass-spring flattening: locked particle " << id << " does not exist");
+      }
+      if (factor == 1)
+      {
+        locked.push_back(id);
+      }
+      else
+      {
+        auto found = std::find(fineIds.begin(), fineIds.end(), id);
+        if (found != fineIds.end())
+        {
+          locked.push_back(static_cast<uint32_t>(found - fineIds.begin()));
+        }
+      }
+    }
+    if (!p.LockedParticles.empty() && locked.empty())
+    {
+      itkGenericExceptionMacro(<< "mass-spring flattening: none of the locked particles is on the simulated grid; "
+                               << "use CoarseningFactor 1");
+    }
+  }
+  else if (p.LockedEdge != SheetLockedEdgeEnum::None)
+  {
+    locked = EdgeParticles(simulated, p.LockedEdge);
+  }
+
+  MassSpringSystem system;
+  BuildSystem(simulated, p, system);
+  m_Report.Springs = system.GetNumberOfSprings();
+
+  // Scales: weight per row, hanging length, fall time.
+  const double totalMass = std::accumulate(system.GetMasses().begin(), system.GetMasses().end(), 0.0);
+  const double rows =
+    simulated.IsGridStructured() ? std::max(1, simulated.GridRows) : std::sqrt(double(simulated.GetNumberOfPoints()));
+  const double meanLength = system.GetMeanRestLength();
+  double       extent = 0.0;
+  {
+    const std::vector<double> areas = simulated.ComputeTriangleAreas();
+    const double              area = std::accumulate(areas.begin(), areas.end(), 0.0);
+    // A sheet of this area and this many rows, rows meanLength apart, is this long.
+    extent = std::max(meanLength, area / std::max(meanLength, meanLength * (rows - 1.0)));
+  }
+  const double gravity = p.Gravity > 0.0 ? p.Gravity : p.HangingStrain * p.Stiffness * meanLength / (totalMass / rows);
+  const double fallTime = std::sqrt(2.0 * extent / gravity);
+  const double damping = p.Damping >= 0.0 ? p.Damping : 2.0 / fallTime;
+  m_Report.Gravity = gravity;
+  m_Report.Damping = damping;
+  system.SetDamping(damping);
+  system.SetSpringDamping(p.SpringDamping);
+  system.SetIntegrator(p.Integrator);
+  double timeStep = p.TimeStep;
+  if (timeStep <= 0.0)
+  {
+    if (p.Integrator == MassSpringIntegratorEnum::ImplicitEuler)
+    {
+      timeStep = fallTime / 40.0;
+    }
+    else
+    {
+      const double bound = p.Integrator == MassSpringIntegratorEnum::RungeKutta4 ? 2.83 : 2.0;
+      timeStep = p.TimeStepSafety * bound / system.EstimateMaximumAngularFrequency();
+    }
+  }
+  system.SetTimeStep(timeStep);
+
+  // 1. Unroll: hold the edge, gravity across it towards the sheet.
+  if (!locked.empty())
+  {
+    system.SetLockedParticles(locked);
+    Vec3 heldCentroid = Vec3::Zero(), centroid = Vec3::Zero();
+    for (uint32_t id : locked)
+    {
+      heldCentroid += PointOf(system.GetPositions(), id);
+    }
+    heldCentroid /= static_cast<double>(locked.size());
+    for (size_t i = 0; i < system.GetNumberOfParticles(); ++i)
+    {
+      centroid += PointOf(system.GetPositions(), i);
+    }
+    centroid /= static_cast<double>(system.GetNumberOfParticles());
+    std::vector<double> heldPositions;
+    for (uint32_t id : locked)
+    {
+      const Vec3 x = PointOf(system.GetPositions(), id);
+      heldPositions.insert(heldPositions.end(), { x.x(), x.y(), x.z() });
+    }
+    Vec3       heldMean;
+    const Vec3 axis = locked.size() > 1 ? Vec3(PrincipalAxes(heldPositions, heldMean).col(0)) : Vec3::UnitZ();
+    Vec3       down = centroid - heldCentroid;
+    down -= down.dot(axis) * axis;
+    if (down.norm() < 1e-9 * extent)
+    {
+      down = axis.unitOrthogonal();
+    }
+    down.normalize();
+    system.SetGravity({ gravity * down.x(), gravity * down.y(), gravity * down.z() });
+    m_Report.Phases.push_back(RunPhase(system, "unroll", p, m_Callback));
+  }
+
+  // 2. Flatten: a plane under the sheet, gravity towards it, nothing held.
+  {
+    Vec3                  centroid;
+    const Eigen::Matrix3d axes = PrincipalAxes(system.GetPositions(), centroid);
+    const Vec3            normal = axes.col(2);
+    double                lowest = 0.0;
+    for (size_t i = 0; i < system.GetNumberOfParticles(); ++i)
+    {
+      lowest = std::min(lowest, (PointOf(system.GetPositions(), i) - centroid).dot(normal));
+    }
+    const Vec3 planePoint = centroid + lowest * normal;
+    system.UnlockAll();
+    system.SetCollisionPlane(
+      { planePoint.x(), planePoint.y(), planePoint.z() }, { normal.x(), normal.y(), normal.z() }, p.Restitution);
+    system.SetGravity({ -gravity * normal.x(), -gravity * normal.y(), -gravity * normal.z() });
+    m_Report.Phases.push_back(RunPhase(system, "flatten", p, m_Callback));
+
+    // 3. Relax on the plane, expressed in its own coordinates.
+    system.SetPositions(ToPlane(system.GetPositions(), planePoint, axes.col(0), axes.col(1)));
+    system.SetVelocities(std::vector<double>(3 * system.GetNumberOfParticles(), 0.0));
+    m_Report.Phases.push_back(RunRelaxation(system, p, m_Callback));
+  }
+  m_Report.SpringEvaluations += system.GetNumberOfForceEvaluations() * system.GetNumberOfSprings();
+
+  SheetMesh flat = surface;
+  if (factor == 1)
+  {
+    flat.Points = system.GetPositions();
+  }
+  else
+  {
+    // Carry the coarse result to every particle and relax the full sheet on the plane.
+    const std::vector<double> prolonged = Prolong(surface, simulated, factor, system.GetPositions());
+    MassSpringSystem          fine;
+    BuildSystem(surface, p, fine);
+    fine.SetPositions(prolonged);
+    m_Report.Springs = fine.GetNumberOfSprings();
+    m_Report.Phases.push_back(RunRelaxation(fine, p, m_Callback));
+    m_Report.Phases.back().Name = "relax-full";
+    m_Report.SpringEvaluations += fine.GetNumberOfForceEvaluations() * fine.GetNumberOfSprings();
+    flat.Points = fine.GetPositions();
+  }
+  NormaliseFlatFrame(flat);
+  m_Report.Seconds = Seconds(start);
+  return flat;
+}
+
+} // end namespace itk

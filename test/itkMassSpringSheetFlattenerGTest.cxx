@@ -1,0 +1,204 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkFlatteningDistortionCalculator.h"
+#include "itkMassSpringSheetFlattener.h"
+#include "vuTestMeshes.h"
+
+#include "gtest/gtest.h"
+
+#include <iostream>
+#include <set>
+
+namespace {
+itk::FlatteningDistortionCalculator::Pointer
+Measure(const itk::SheetMesh & surface, const itk::SheetMesh & flat)
+{
+  auto calculator = itk::FlatteningDistortionCalculator::New();
+  calculator->SetSurfaceMesh(surface);
+  calculator->SetFlatMesh(flat);
+  calculator->Compute();
+  return calculator;
+}
+
+void
+PrintReport(const itk::MassSpringSheetFlattener & flattener, const itk::FlatteningDistortionCalculator * c)
+{
+  const auto & report = flattener.GetReport();
+  std::cout << "particles " << report.Particles << " simulated " << report.SimulatedParticles << " springs "
+            << report.Springs << " factor " << report.CoarseningFactor << " seconds " << report.Seconds << std::endl;
+  for (const auto & phase : report.Phases)
+  {
+    std::cout << "  " << phase.Name << " " << phase.Integrator << " h=" << phase.TimeStep << " steps " << phase.Steps
+              << " " << phase.StopReason << " KE " << phase.RelativeKineticEnergy << " F "
+              << phase.RelativeResidualForce << " " << phase.Seconds << " s" << std::endl;
+  }
+  std::cout << "  strain p95 " << c->GetEdgeStrainP95() << " max " << c->GetEdgeStrainMax() << " area "
+            << c->GetAreaDistortion() << " flipped " << c->GetNumberOfFlippedTriangles() << std::endl;
+}
+
+void
+ExpectDevelopableFlattening(const itk::SheetMesh & surface, const itk::MassSpringFlatteningParameters & parameters)
+{
+  itk::MassSpringSheetFlattener flattener;
+  flattener.SetParameters(parameters);
+  const itk::SheetMesh flat = flattener.Flatten(surface);
+  ASSERT_TRUE(itk::HaveSameTopology(surface, flat));
+  auto c = Measure(surface, flat);
+  PrintReport(flattener, c);
+  EXPECT_LE(c->GetEdgeStrainP95(), 0.005);
+  EXPECT_LE(c->GetAreaDistortion(), 0.005);
+  EXPECT_EQ(c->GetNumberOfFlippedTriangles(), 0u);
+  for (size_t i = 0; i < flat.GetNumberOfPoints(); ++i)
+  {
+    ASSERT_EQ(flat.Points[3 * i + 2], 0.0);
+  }
+}
+} // namespace
+
+TEST(MassSpringSheetFlattener, CylinderPatchWithTheStableSolver)
+{
+  const itk::SheetMesh surface = vu::ExtrudedCurveMesh(
+    [](double t, double & x, double & y) {
+      x = 20.0 * std::cos(t);
+      y = 20.0 * std::sin(t);
+    },
+    3.0,
+    2.0,
+    30.0,
+    nullptr);
+  itk::MassSpringFlatteningParameters parameters;
+  parameters.LockedEdge = itk::SheetLockedEdgeEnum::None;
+  ExpectDevelopableFlattening(surface, parameters);
+}
+
+TEST(MassSpringSheetFlattener, SpiralRollUnrollThenFlattenWithTheStableSolver)
+{
+  const itk::SheetMesh                surface = vu::SpiralRollMesh(10.0, 4.0, 3.0, 2.0, 30.0, nullptr);
+  itk::MassSpringFlatteningParameters parameters;
+  ExpectDevelopableFlattening(surface, parameters);
+}
+
+TEST(MassSpringSheetFlattener, SpiralRollUnrollThenFlattenWithRungeKutta4)
+{
+  const itk::SheetMesh                surface = vu::SpiralRollMesh(10.0, 4.0, 2.0, 4.0, 20.0, nullptr);
+  itk::MassSpringFlatteningParameters parameters;
+  parameters.Integrator = itk::MassSpringIntegratorEnum::RungeKutta4;
+  parameters.MaximumStepsPerPhase = 20000;
+  ExpectDevelopableFlattening(surface, parameters);
+}
+
+TEST(MassSpringSheetFlattener, CoarseToFineOnALargerRoll)
+{
+  itk::SheetMesh                      truth;
+  const itk::SheetMesh                surface = vu::SpiralRollMesh(20.0, 5.0, 3.0, 0.5, 25.0, &truth);
+  itk::MassSpringFlatteningParameters parameters;
+  parameters.CoarseParticles = 3000;
+  itk::MassSpringSheetFlattener flattener;
+  flattener.SetParameters(parameters);
+  const itk::SheetMesh flat = flattener.Flatten(surface);
+  auto                 c = Measure(surface, flat);
+  PrintReport(flattener, c);
+  EXPECT_GT(flattener.GetReport().CoarseningFactor, 1u);
+  EXPECT_LT(flattener.GetReport().SimulatedParticles, surface.GetNumberOfPoints() / 4);
+  EXPECT_LE(c->GetEdgeStrainP95(), 0.005);
+  EXPECT_LE(c->GetAreaDistortion(), 0.005);
+  EXPECT_EQ(c->GetNumberOfFlippedTriangles(), 0u);
+}
+
+TEST(MassSpringSheetFlattener, DomeIsFlattenedWithoutFlipsAndItsDistortionReported)
+{
+  const itk::SheetMesh                surface = vu::DomeMesh(30.0, 0.6, 25);
+  itk::MassSpringFlatteningParameters parameters;
+  parameters.LockedEdge = itk::SheetLockedEdgeEnum::None;
+  itk::MassSpringSheetFlattener flattener;
+  flattener.SetParameters(parameters);
+  const itk::SheetMesh flat = flattener.Flatten(surface);
+  auto                 c = Measure(surface, flat);
+  PrintReport(flattener, c);
+  EXPECT_EQ(c->GetNumberOfFlippedTriangles(), 0u);
+  // A sphere cannot be flattened isometrically: the distortion shows.
+  EXPECT_GT(c->GetEdgeStrainMax(), 0.005);
+  EXPECT_LT(c->GetEdgeStrainP95(), 0.2);
+}
+
+TEST(MassSpringSheetFlattener, ExplicitStepAboveTheBoundIsReportedAsDivergence)
+{
+  const itk::SheetMesh                surface = vu::SpiralRollMesh(10.0, 4.0, 1.0, 4.0, 12.0, nullptr);
+  itk::MassSpringFlatteningParameters parameters;
+  parameters.Integrator = itk::MassSpringIntegratorEnum::SymplecticEuler;
+  parameters.TimeStepSafety = 3.0; // w_max h up to 6: beyond the bound of 2
+  parameters.Damping = 0.0;
+  itk::MassSpringSheetFlattener flattener;
+  flattener.SetParameters(parameters);
+  try
+  {
+    flattener.Flatten(surface);
+    FAIL() << "a symplectic Euler step of three times the stability bound did not diverge";
+  }
+  catch (const itk::MassSpringDivergenceError & e)
+  {
+    EXPECT_NE(std::string(e.what()).find("symplectic-euler"), std::string::npos) << e.what();
+  }
+  // The stable solver survives the same stiffness and mass at a far larger step.
+  parameters.Integrator = itk::MassSpringIntegratorEnum::ImplicitEuler;
+  flattener.SetParameters(parameters);
+  const itk::SheetMesh flat = flattener.Flatten(surface);
+  EXPECT_LE(Measure(surface, flat)->GetEdgeStrainP95(), 0.005);
+}
+
+TEST(MassSpringSheetFlattener, CallbackSeesEveryPhaseAndCanAbort)
+{
+  const itk::SheetMesh          surface = vu::SpiralRollMesh(10.0, 4.0, 1.0, 4.0, 12.0, nullptr);
+  itk::MassSpringSheetFlattener flattener;
+  std::set<std::string>         phases;
+  flattener.SetStepCallback([&](itk::MassSpringSystem & system, const std::string & phase, uint64_t) {
+    phases.insert(phase);
+    EXPECT_EQ(system.GetNumberOfParticles(), surface.GetNumberOfPoints());
+    return true;
+  });
+  flattener.Flatten(surface);
+  EXPECT_EQ(phases, (std::set<std::string>{ "unroll", "flatten", "relax" }));
+  flattener.SetStepCallback([](itk::MassSpringSystem &, const std::string &, uint64_t step) { return step < 5; });
+  EXPECT_THROW(flattener.Flatten(surface), itk::ExceptionObject);
+}
+
+TEST(MassSpringSheetFlattener, RejectsBadInput)
+{
+  itk::MassSpringSheetFlattener flattener;
+  itk::SheetMesh                degenerate;
+  degenerate.Points = { 0, 0, 0, 1, 0, 0, 2, 0, 0 }; // collinear: zero area
+  degenerate.Triangles = { 0, 1, 2 };
+  EXPECT_THROW(flattener.Flatten(degenerate), itk::ExceptionObject);
+
+  itk::SheetMesh triangle;
+  triangle.Points = { 0, 0, 0, 1, 0, 0, 0, 1, 0 };
+  triangle.Triangles = { 0, 1, 2 };
+  // An outer edge needs a grid.
+  EXPECT_THROW(flattener.Flatten(triangle), itk::ExceptionObject);
+  itk::MassSpringFlatteningParameters parameters;
+  parameters.LockedEdge = itk::SheetLockedEdgeEnum::Custom;
+  parameters.LockedParticles = { 7 };
+  flattener.SetParameters(parameters);
+  EXPECT_THROW(flattener.Flatten(triangle), itk::ExceptionObject);
+  parameters = itk::MassSpringFlatteningParameters();
+  parameters.Restitution = 2.0;
+  flattener.SetParameters(parameters);
+  EXPECT_THROW(flattener.Flatten(triangle), itk::ExceptionObject);
+  EXPECT_THROW(itk::SheetLockedEdgeFromString("middle"), std::invalid_argument);
+  EXPECT_EQ(itk::SheetLockedEdgeFromString("outer"), itk::SheetLockedEdgeEnum::OuterEdge);
+}
