@@ -44,8 +44,8 @@ namespace itk {
  * (0: automatic), HangingStrain (0.01), Damping (-1: automatic), SpringDamping (0),
  * Restitution (0.1, in [0, 1]), LockedEdge (OuterEdge), LockedParticles,
  * MaximumStepsPerPhase (3000), KineticEnergyTolerance (1e-9), ResidualForceTolerance
- * (1e-4), RelaxationIterations (300), RelaxationTolerance (1e-6), CoarseningFactor
- * (0: automatic), CoarseParticles (20000).
+ * (1e-3), PlanarityTolerance (0.05), RelaxationIterations (300), RelaxationTolerance (1e-5), CoarseningFactor
+ * (0: automatic), CoarseParticles (3000).
  *
  * Events: an IterationEvent after every simulation step (observers may read
  * GetCurrentSystem() positions, GetCurrentPhase(), GetCurrentStep(), and may lock or unlock
@@ -107,6 +107,8 @@ public:
   itkGetConstMacro(KineticEnergyTolerance, double);
   itkSetClampMacro(ResidualForceTolerance, double, 0.0, NumericTraits<double>::max());
   itkGetConstMacro(ResidualForceTolerance, double);
+  itkSetClampMacro(PlanarityTolerance, double, 1e-9, NumericTraits<double>::max());
+  itkGetConstMacro(PlanarityTolerance, double);
   itkSetClampMacro(RelaxationIterations, unsigned int, 1, NumericTraits<unsigned int>::max());
   itkGetConstMacro(RelaxationIterations, unsigned int);
   itkSetClampMacro(RelaxationTolerance, double, 0.0, NumericTraits<double>::max());
@@ -187,11 +189,12 @@ private:
   std::vector<uint32_t> m_LockedParticles;
   unsigned int          m_MaximumStepsPerPhase{ 3000 };
   double                m_KineticEnergyTolerance{ 1e-9 };
-  double                m_ResidualForceTolerance{ 1e-4 };
+  double                m_ResidualForceTolerance{ 1e-3 };
+  double                m_PlanarityTolerance{ 0.05 };
   unsigned int          m_RelaxationIterations{ 300 };
-  double                m_RelaxationTolerance{ 1e-6 };
+  double                m_RelaxationTolerance{ 1e-5 };
   unsigned int          m_CoarseningFactor{ 0 };
-  unsigned int          m_CoarseParticles{ 20000 };
+  unsigned int          m_CoarseParticles{ 3000 };
 
   MassSpringFlatteningReport m_Report;
   MassSpringSystem *         m_CurrentSystem{ nullptr };

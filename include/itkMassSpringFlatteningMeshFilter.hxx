@@ -44,6 +44,7 @@ MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::GetParameters() const
   p.MaximumStepsPerPhase = m_MaximumStepsPerPhase;
   p.KineticEnergyTolerance = m_KineticEnergyTolerance;
   p.ResidualForceTolerance = m_ResidualForceTolerance;
+  p.PlanarityTolerance = m_PlanarityTolerance;
   p.RelaxationIterations = m_RelaxationIterations;
   p.RelaxationTolerance = m_RelaxationTolerance;
   p.CoarseningFactor = m_CoarseningFactor;
@@ -147,6 +148,7 @@ MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::PrintSelf(std::ostream 
   os << indent << "MaximumStepsPerPhase: " << m_MaximumStepsPerPhase << std::endl;
   os << indent << "KineticEnergyTolerance: " << m_KineticEnergyTolerance << std::endl;
   os << indent << "ResidualForceTolerance: " << m_ResidualForceTolerance << std::endl;
+  os << indent << "PlanarityTolerance: " << m_PlanarityTolerance << std::endl;
   os << indent << "RelaxationIterations: " << m_RelaxationIterations << std::endl;
   os << indent << "RelaxationTolerance: " << m_RelaxationTolerance << std::endl;
   os << indent << "CoarseningFactor: " << m_CoarseningFactor << std::endl;

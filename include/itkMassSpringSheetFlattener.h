@@ -83,18 +83,23 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningParameters
   std::vector<uint32_t> LockedParticles;
   /** Step limits of the unroll and flatten phases. */
   unsigned int MaximumStepsPerPhase{ 3000 };
-  /** Convergence: relative kinetic energy and relative residual force below these. */
+  /** Convergence of the unroll and flatten phases: relative kinetic energy below
+   * KineticEnergyTolerance at three checks in a row (checks every 10 steps), then relative
+   * residual force below ResidualForceTolerance (see MassSpringSystem for both measures). */
   double KineticEnergyTolerance{ 1e-9 };
-  double ResidualForceTolerance{ 1e-4 };
+  double ResidualForceTolerance{ 1e-3 };
+  /** The unroll phase is over only when the sheet hangs in a plane: RMS distance from its
+   * best-fitting plane below this fraction of the mean spring length. */
+  double PlanarityTolerance{ 0.05 };
   /** Quasi-static relaxation on the plane after the flatten phase: iteration limit and
    * tolerance on the relative residual force. */
   unsigned int RelaxationIterations{ 300 };
-  double       RelaxationTolerance{ 1e-6 };
+  double       RelaxationTolerance{ 1e-5 };
   /** Coarse-to-fine for grid meshes: simulate every n-th row and column, then carry the
    * result to every particle and relax there. 0: automatic (coarse grid of at most
    * CoarseParticles particles); 1: simulate the full mesh. */
   unsigned int CoarseningFactor{ 0 };
-  unsigned int CoarseParticles{ 20000 };
+  unsigned int CoarseParticles{ 3000 };
   /** Threads for the force loops (0: ITK's default). */
   unsigned int NumberOfWorkUnits{ 0 };
 };

@@ -308,10 +308,7 @@ public:
 
   /** Maximum number of threads for the force loop (0 = ITK's global default). */
   void
-  SetNumberOfWorkUnits(unsigned int n)
-  {
-    m_NumberOfWorkUnits = n;
-  }
+  SetNumberOfWorkUnits(unsigned int n);
 
 private:
   void

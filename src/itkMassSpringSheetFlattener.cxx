@@ -265,7 +265,8 @@ MassSpringFlatteningReport::Phase
 RunPhase(MassSpringSystem &                             system,
          const std::string &                            name,
          const MassSpringFlatteningParameters &         parameters,
-         const MassSpringSheetFlattener::StepCallback & callback)
+         const MassSpringSheetFlattener::StepCallback & callback,
+         const std::function<bool()> &                  settled = {})
 {
   MassSpringFlatteningReport::Phase phase;
   phase.Name = name;
@@ -274,6 +275,10 @@ RunPhase(MassSpringSystem &                             system,
   phase.StopReason = "step limit";
   const auto   start = Clock::now();
   const size_t checkEvery = 10;
+  // A swinging sheet is momentarily still at the ends of its swing: rest counts only when
+  // it lasts for several checks in a row.
+  const unsigned int restingChecksNeeded = 3;
+  unsigned int       restingChecks = 0;
   for (uint64_t step = 1; step <= parameters.MaximumStepsPerPhase; ++step)
   {
     system.Step();
@@ -285,7 +290,8 @@ RunPhase(MassSpringSystem &                             system,
     if (step % checkEvery == 0)
     {
       phase.RelativeKineticEnergy = system.ComputeRelativeKineticEnergy();
-      if (phase.RelativeKineticEnergy < parameters.KineticEnergyTolerance)
+      restingChecks = phase.RelativeKineticEnergy < parameters.KineticEnergyTolerance ? restingChecks + 1 : 0;
+      if (restingChecks >= restingChecksNeeded && (!settled || settled()))
       {
         phase.RelativeResidualForce = system.ComputeRelativeResidualForce();
         if (phase.RelativeResidualForce < parameters.ResidualForceTolerance)
@@ -681,7 +687,8 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   m_Report = MassSpringFlatteningReport();
   const MassSpringFlatteningParameters & p = m_Parameters;
   if (!(p.Restitution >= 0.0 && p.Restitution <= 1.0) || !(p.TimeStep >= 0.0) || !(p.TimeStepSafety > 0.0) ||
-      !(p.Gravity >= 0.0) || !(p.HangingStrain > 0.0) || p.MaximumStepsPerPhase == 0 || !(p.SpringDamping >= 0.0))
+      !(p.Gravity >= 0.0) || !(p.HangingStrain > 0.0) || !(p.PlanarityTolerance > 0.0) || p.MaximumStepsPerPhase == 0 ||
+      !(p.SpringDamping >= 0.0))
   {
     itkGenericExceptionMacro(<< "mass-spring flattening: impossible parameters (restitution in [0, 1], time step >= 0, "
                              << "gravity >= 0, hanging strain > 0, step limit >= 1, spring damping >= 0)");
@@ -812,7 +819,20 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
     }
     down.normalize();
     system.SetGravity({ gravity * down.x(), gravity * down.y(), gravity * down.z() });
-    m_Report.Phases.push_back(RunPhase(system, "unroll", p, m_Callback));
+    // Unrolled: hanging in a plane. A sheet creeping out of its curl can be slow enough to
+    // pass for resting, so planarity is part of convergence.
+    auto planar = [&system, &p]() {
+      Vec3                  centroid;
+      const Eigen::Matrix3d axes = PrincipalAxes(system.GetPositions(), centroid);
+      double                sum = 0.0;
+      for (size_t i = 0; i < system.GetNumberOfParticles(); ++i)
+      {
+        const double d = (PointOf(system.GetPositions(), i) - centroid).dot(axes.col(2));
+        sum += d * d;
+      }
+      return std::sqrt(sum / system.GetNumberOfParticles()) < p.PlanarityTolerance * system.GetMeanRestLength();
+    };
+    m_Report.Phases.push_back(RunPhase(system, "unroll", p, m_Callback, planar));
   }
 
   // 2. Flatten: a plane under the sheet, gravity towards it, nothing held.

@@ -75,6 +75,9 @@ struct MassSpringSystem::ImplicitSolver
   std::vector<uint32_t>               freeParticles;
   double                              timeStep{ 0.0 };
   bool                                valid{ false };
+  // Kept for the engine's lifetime: creating a threader per force loop costs more than a
+  // small system's whole step.
+  MultiThreaderBase::Pointer threader;
 };
 
 MassSpringSystem::MassSpringSystem()
@@ -82,6 +85,13 @@ MassSpringSystem::MassSpringSystem()
 {}
 
 MassSpringSystem::~MassSpringSystem() = default;
+
+void
+MassSpringSystem::SetNumberOfWorkUnits(unsigned int n)
+{
+  m_NumberOfWorkUnits = n;
+  m_Solver->threader = nullptr;
+}
 
 void
 MassSpringSystem::SetParticles(const std::vector<double> & positions, const std::vector<double> & masses)
@@ -315,13 +325,16 @@ MassSpringSystem::ParallelFor(size_t n, const std::function<void(size_t, size_t)
     body(0, n);
     return;
   }
-  auto threader = MultiThreaderBase::New();
-  if (m_NumberOfWorkUnits > 0)
+  if (m_Solver->threader.IsNull())
   {
-    threader->SetMaximumNumberOfThreads(m_NumberOfWorkUnits);
-    threader->SetNumberOfWorkUnits(m_NumberOfWorkUnits);
+    m_Solver->threader = MultiThreaderBase::New();
+    if (m_NumberOfWorkUnits > 0)
+    {
+      m_Solver->threader->SetMaximumNumberOfThreads(m_NumberOfWorkUnits);
+      m_Solver->threader->SetNumberOfWorkUnits(m_NumberOfWorkUnits);
+    }
   }
-  threader->ParallelizeArray(
+  m_Solver->threader->ParallelizeArray(
     0,
     chunks,
     [&](SizeValueType c) {
@@ -652,7 +665,18 @@ MassSpringSystem::StepImplicit(bool quasiStatic)
         rhs(r, 2) = b[2];
       }
     });
-    solution = solver.ldlt.solve(rhs);
+    // A sheet lying on a coordinate plane (the final relaxation) has a zero column: skip it.
+    for (int d = 0; d < 3; ++d)
+    {
+      if (rhs.col(d).isZero(0.0))
+      {
+        solution.col(d).setZero();
+      }
+      else
+      {
+        solution.col(d) = solver.ldlt.solve(rhs.col(d));
+      }
+    }
     for (Eigen::Index r = 0; r < nf; ++r)
     {
       const size_t i = solver.freeParticles[r];
