@@ -22,6 +22,7 @@
 #include "itkImage.h"
 #include "itkSheetMesh.h"
 
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -227,6 +228,10 @@ private:
   InkImageType::Pointer m_InkImage;
   std::string           m_Text;
 };
+
+/** Prints "rolled" or "folded". */
+VirtualUnwrapping_EXPORT std::ostream &
+                         operator<<(std::ostream & os, SheetPhantomGeometry::ShapeType shape);
 } // end namespace itk
 
 #endif

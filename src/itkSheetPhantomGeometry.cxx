@@ -137,6 +137,12 @@ SheetPhantomGeometry::ShapeName(ShapeType shape)
   return shape == ShapeType::Rolled ? "rolled" : "folded";
 }
 
+std::ostream &
+operator<<(std::ostream & os, SheetPhantomGeometry::ShapeType shape)
+{
+  return os << SheetPhantomGeometry::ShapeName(shape);
+}
+
 SheetPhantomGeometry::SheetPhantomGeometry(const Parameters & parameters)
   : m_Parameters(parameters)
 {
