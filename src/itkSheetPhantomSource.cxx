@@ -383,8 +383,8 @@ SheetPhantomSource::MakeInkImage(std::string & renderedText) const
   const double columnsReal = std::ceil(m_SheetLength / pixel), rowsReal = std::ceil(m_SheetWidth / pixel);
   if (columnsReal * rowsReal > 2.0e8)
   {
-    itkExceptionMacro(<< "ink image of " << columnsReal << " x " << rowsReal
-                      << " pixels is too large: reduce the ink oversampling or the sheet size");
+    itkGenericExceptionMacro(<< "SheetPhantomSource: ink image of " << columnsReal << " x " << rowsReal
+                             << " pixels is too large: reduce the ink oversampling or the sheet size");
   }
   auto                   ink = InkImageType::New();
   InkImageType::SizeType size = { { static_cast<SizeValueType>(columnsReal), static_cast<SizeValueType>(rowsReal) } };
@@ -413,7 +413,8 @@ SheetPhantomSource::MakeInkImage(std::string & renderedText) const
       std::min((m_SheetLength - 2.0 * margin) / patternSize[0], (m_SheetWidth - 2.0 * margin) / patternSize[1]);
     if (!(scale > 0.0))
     {
-      itkExceptionMacro(<< "the sheet is too small for an ink image inside margins of " << margin << " mm");
+      itkGenericExceptionMacro(<< "SheetPhantomSource: the sheet is too small for an ink image inside margins of "
+                               << margin << " mm");
     }
     auto place = ChangeInformationImageFilter<InkImageType>::New();
     place->SetInput(invert->GetOutput());
@@ -458,9 +459,10 @@ SheetPhantomSource::MakeInkImage(std::string & renderedText) const
   const long heightAvailable = static_cast<long>(size[1]) * 64 - 2 * marginPixels;
   if (blockWidth > available || blockHeight > heightAvailable)
   {
-    itkExceptionMacro(<< "text does not fit on the sheet: it needs " << (blockWidth / 64.0 + 2 * margin / pixel) * pixel
-                      << " x " << (blockHeight / 64.0 + 2 * margin / pixel) * pixel << " mm, the sheet is "
-                      << m_SheetLength << " x " << m_SheetWidth << " mm (reduce the glyph height or the text)");
+    itkGenericExceptionMacro(<< "SheetPhantomSource: text does not fit on the sheet: it needs "
+                             << (blockWidth / 64.0 + 2 * margin / pixel) * pixel << " x "
+                             << (blockHeight / 64.0 + 2 * margin / pixel) * pixel << " mm, the sheet is "
+                             << m_SheetLength << " x " << m_SheetWidth << " mm (reduce the glyph height or the text)");
   }
   float * buffer = ink->GetBufferPointer();
   long    baseline = (static_cast<long>(size[1]) * 64 - blockHeight) / 2 + ascender;
@@ -475,7 +477,7 @@ SheetPhantomSource::MakeInkImage(std::string & renderedText) const
       previous = index;
       if (FT_Load_Glyph(face, index, FT_LOAD_RENDER) != 0)
       {
-        itkExceptionMacro(<< "FreeType cannot render character U+" << std::hex << code);
+        itkGenericExceptionMacro(<< "SheetPhantomSource: FreeType cannot render character U+" << std::hex << code);
       }
       const FT_Bitmap & bitmap = face->glyph->bitmap;
       const long        left = (pen >> 6) + face->glyph->bitmap_left;
@@ -573,8 +575,8 @@ SheetPhantomSource::GenerateOutputInformation()
   }
   if (voxels > 256.0e6)
   {
-    itkExceptionMacro(<< "the volume would have " << voxels / 1e6
-                      << " M voxels (limit 256 M): increase the voxel size or reduce the sheet");
+    itkGenericExceptionMacro(<< "SheetPhantomSource: the volume would have " << voxels / 1e6
+                             << " M voxels (limit 256 M): increase the voxel size or reduce the sheet");
   }
   std::string                 text;
   const InkImageType::Pointer ink = MakeInkImage(text);
