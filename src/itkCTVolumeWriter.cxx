@@ -193,6 +193,7 @@ CTVolumeWriter::WriteDicom() const
     set("0020|0032", Join(position.GetDataPointer(), 3));
     set("0020|0037", Join(orientation, 6));
     set("0020|1041", Join(&position[2], 1));
+    set("0028|0004", "MONOCHROME2");
     set("0028|0030", Join(pixelSpacing, 2));
     set("0018|0050", Join(&spacing[2], 1));
     set("0018|0088", Join(&spacing[2], 1));

@@ -327,3 +327,51 @@ TEST(SheetPhantomSource, RefusesImpossibleParameters)
   EXPECT_THROW(source->ApplyPreset("scroll"), itk::ExceptionObject);
   EXPECT_THROW(source->SetNumberOfTurns(0.0), itk::ExceptionObject);
 }
+
+TEST(SheetPhantomSource, PerfectUnwrappingOfTheStandardScanReads)
+{
+  auto legibility = itk::TextLegibility::New();
+  if (!legibility->IsTesseractAvailable())
+  {
+    GTEST_SKIP() << "tesseract is not installed";
+  }
+  auto         source = Source::New();
+  const auto   volume = Generate(source);
+  const auto & g = source->GetGeometry();
+  auto         interpolator = itk::LinearInterpolateImageFunction<VolumeType>::New();
+  interpolator->SetInputImage(volume);
+  // Sample the scan through the true geometry, half a voxel per pixel, averaging three
+  // depths across the ink layer: what an ideal unwrapping and texturing would produce.
+  const double                         pixel = 0.5 * source->GetVoxelSize();
+  auto                                 texture = Source::InkImageType::New();
+  const Source::InkImageType::SizeType size = { { static_cast<itk::SizeValueType>(g.GetSheetLength() / pixel),
+                                                  static_cast<itk::SizeValueType>(g.GetSheetWidth() / pixel) } };
+  texture->SetRegions(size);
+  texture->Allocate();
+  const double top = 0.5 * g.GetSheetThickness();
+  for (itk::SizeValueType y = 0; y < size[1]; ++y)
+  {
+    for (itk::SizeValueType x = 0; x < size[0]; ++x)
+    {
+      const double s = (x + 0.5) * pixel, w = (y + 0.5) * pixel;
+      double       p[3], n[3], sum = 0.0;
+      g.SurfacePoint(s, w, p);
+      g.SurfaceNormal(s, w, n);
+      for (double depth : { 0.25, 0.5, 0.75 })
+      {
+        const double          offset = top - depth * source->GetInkDepth();
+        VolumeType::PointType q;
+        for (int d = 0; d < 3; ++d)
+        {
+          q[d] = p[d] + offset * n[d];
+        }
+        sum += interpolator->Evaluate(q);
+      }
+      texture->SetPixel({ { static_cast<itk::IndexValueType>(x), static_cast<itk::IndexValueType>(y) } }, sum / 3.0);
+    }
+  }
+  legibility->SetImage(texture);
+  legibility->SetTruthText(g.GetText());
+  legibility->Compute();
+  EXPECT_LT(legibility->GetCharacterErrorRate(), 0.02) << "read \"" << legibility->GetRecognizedText() << "\"";
+}
