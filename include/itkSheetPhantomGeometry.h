@@ -63,7 +63,8 @@ namespace itk {
  * - InnerRadius > t/2 (1.5), Pitch > t (0.75), radial distance between successive turns;
  *   Squash in (0, 1] (1, circular), WaveAmplitude >= 0 (0), WavesPerTurn >= 0 (0);
  * - FoldCount >= 1 (4), FoldRadius > t/2 (0.5), FoldOpeningAngle in [0, 90) degrees (10);
- * - TiltAngle in (-60, 60) degrees (0), rotation of the roll axis about the x axis.
+ * - TiltAngle in (-60, 60) degrees (0), rotation of the roll axis about the x axis;
+ * - SheetLength / SheetThickness at most 250000 (the size of the table).
  * Beyond these, any sheet whose layers come closer than its thickness (checked
  * numerically: each face point must project back to its own sheet point) is refused.
  *

@@ -375,3 +375,11 @@ TEST(SheetPhantomSource, PerfectUnwrappingOfTheStandardScanReads)
   legibility->Compute();
   EXPECT_LT(legibility->GetCharacterErrorRate(), 0.02) << "read \"" << legibility->GetRecognizedText() << "\"";
 }
+
+TEST(SheetPhantomSource, HonoursAbort)
+{
+  auto source = Source::New();
+  auto abort = [&source](const itk::EventObject &) { source->AbortGenerateDataOn(); };
+  source->AddObserver(itk::ProgressEvent(), abort);
+  EXPECT_THROW(source->Update(), itk::ProcessAborted);
+}

@@ -224,6 +224,10 @@ RunPhantom(const PhantomOptions & options)
   {
     source->SetFontFile(options.Font);
   }
+  if (!options.InkImage.empty() && !options.Text.empty())
+  {
+    throw UsageError("give either --text or --ink-image, not both");
+  }
   if (!options.InkImage.empty())
   {
     if (!fs::is_regular_file(options.InkImage))
@@ -234,10 +238,6 @@ RunPhantom(const PhantomOptions & options)
     reader->SetFileName(options.InkImage);
     reader->Update();
     source->SetInkPattern(reader->GetOutput());
-    if (options.Text.empty())
-    {
-      source->SetText("");
-    }
   }
   if (options.MeshSpacing < 0.0 || !std::isfinite(options.MeshSpacing))
   {
