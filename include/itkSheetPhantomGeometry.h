@@ -69,7 +69,8 @@ namespace itk {
  * numerically: each face point must project back to its own sheet point) is refused.
  *
  * Project() finds the closest point of the mid-surface in O(1) expected time through a
- * uniform grid of the tabulated cross-section (about 1 microsecond per point), so
+ * uniform grid of the tabulated cross-section (about 1.4 microseconds per point
+ * near the standard phantom's sheet), so
  * mesh-error metrics can call it for every vertex of million-vertex meshes.
  *
  * \ingroup VirtualUnwrapping

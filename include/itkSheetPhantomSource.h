@@ -52,7 +52,7 @@ namespace itk {
  *
  * Parameters (mm, HU or degrees; default = the "standard" preset; ranges checked, with a
  * one-line itk::ExceptionObject, by UpdateOutputInformation()):
- * - sheet and shape: see itk::SheetPhantomGeometry (Shape Rolled, SheetLength 50.4 from
+ * - sheet and shape: see itk::SheetPhantomGeometry (Shape Rolled, SheetLength 49.53 from
  *   3 turns, SheetWidth 10, SheetThickness 0.25, InnerRadius 1.5, Pitch 0.75, Squash 1,
  *   WaveAmplitude 0, WavesPerTurn 0, FoldCount 4, FoldRadius 0.5, FoldOpeningAngle 10,
  *   TiltAngle 0);

@@ -288,7 +288,12 @@ RunPhantom(const PhantomOptions & options)
   writer->Write();
 
   WriteInkPng(geometry.GetInkImage(), (temporary.Path / "ground_truth_ink.png").string());
-  const double   meshSpacing = options.MeshSpacing > 0.0 ? options.MeshSpacing : source->GetVoxelSize();
+  const double meshSpacing = options.MeshSpacing > 0.0 ? options.MeshSpacing : source->GetVoxelSize();
+  if ((geometry.GetSheetLength() / meshSpacing + 1.0) * (geometry.GetSheetWidth() / meshSpacing + 1.0) > 5.0e7)
+  {
+    throw UsageError("--mesh-spacing " + std::to_string(meshSpacing) +
+                     " mm would make ground-truth meshes of more than 5e7 vertices");
+  }
   itk::SheetMesh flat;
   const auto     surface = geometry.MakeMidSurfaceMesh(meshSpacing, &flat);
   WriteObj(surface, (temporary.Path / "ground_truth_surface.obj").string());
@@ -423,7 +428,8 @@ RegisterPhantomCommand(CLI::App & app)
     "phantom",
     "Synthesise a CT scan of a written sheet rolled into a scroll or folded, with its ground truth: "
     "DIR/volume/ (DICOM series or TIFF stack) or DIR/volume.mha|.nrrd, ground_truth_ink.png, ground_truth.json, "
-    "ground_truth_surface.obj and ground_truth_flat.obj. Presets:" +
+    "ground_truth_surface.obj and ground_truth_flat.obj. Options not given keep the preset's values (all are "
+    "recorded in ground_truth.json). Presets:" +
       presets);
   command->add_option("PRESET", options.Preset, "preset to start from (options below override it)")->required();
   command->add_option("-o,--output", options.Output, "output directory (created; replaced only with --force)")
@@ -445,7 +451,7 @@ RegisterPhantomCommand(CLI::App & app)
     { "inner-radius", "inner radius of the spiral, mm" },
     { "pitch", "radial distance between turns, mm (> thickness; gap = pitch - thickness)" },
     { "squash", "ratio of the cross-section's axes, (0, 1]" },
-    { "wave-amplitude", "amplitude of ripples along the roll axis, mm" },
+    { "wave-amplitude", "amplitude of radial ripples whose ridges run along the roll axis, mm" },
     { "waves-per-turn", "ripples per turn" },
     { "fold-count", "number of creases of a folded sheet" },
     { "fold-radius", "radius of the creases, mm" },
