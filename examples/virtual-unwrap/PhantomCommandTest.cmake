@@ -1,0 +1,57 @@
+# Runs `virtual-unwrap phantom` as a user would: a good run writes every ground-truth
+# file; bad parameters fail with one line on stderr and leave no output behind; an
+# existing directory is kept unless --force is given.
+# Usage: cmake -DTOOL=<virtual-unwrap> -DWORK=<scratch directory> -P PhantomCommandTest.cmake
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK})
+
+function(expect_failure name pattern)
+  execute_process(COMMAND ${TOOL} phantom ${ARGN} RESULT_VARIABLE result ERROR_VARIABLE error OUTPUT_QUIET)
+  if(result EQUAL 0)
+    message(FATAL_ERROR "${name}: expected failure, got success")
+  endif()
+  string(REGEX MATCHALL "\n" newlines "${error}")
+  list(LENGTH newlines lines)
+  if(NOT lines EQUAL 1 OR NOT error MATCHES "^virtual-unwrap: error: .*${pattern}")
+    message(FATAL_ERROR "${name}: expected one error line matching '${pattern}', got:\n${error}")
+  endif()
+endfunction()
+
+execute_process(COMMAND ${TOOL} phantom standard -o ${WORK}/good --format mha --mesh-spacing 0.5
+  RESULT_VARIABLE result ERROR_VARIABLE error OUTPUT_QUIET)
+if(NOT result EQUAL 0)
+  message(FATAL_ERROR "standard phantom failed: ${error}")
+endif()
+foreach(file volume.mha ground_truth_ink.png ground_truth.json ground_truth_surface.obj ground_truth_flat.obj)
+  if(NOT EXISTS ${WORK}/good/${file})
+    message(FATAL_ERROR "missing ${file}")
+  endif()
+endforeach()
+file(READ ${WORK}/good/ground_truth.json json)
+string(JSON text GET "${json}" text)
+string(JSON voxels GET "${json}" volume voxels)
+if(NOT text STREQUAL "DIGITAL RESTORATION USING\nVOLUMETRIC SCANNING\nSEALES AND LIN 2004" OR voxels LESS 100000)
+  message(FATAL_ERROR "unexpected ground truth: text '${text}', ${voxels} voxels")
+endif()
+
+expect_failure(overlap "pitch" standard -o ${WORK}/bad --pitch 0.2)
+expect_failure(negative "thickness" standard -o ${WORK}/bad --thickness -1)
+expect_failure(preset "unknown preset" scroll -o ${WORK}/bad)
+expect_failure(format "unknown format" standard -o ${WORK}/bad --format jpeg)
+expect_failure(text "does not fit" standard -o ${WORK}/bad --text NOSPACESTOWRAPATANDFARTOOLONGFORFIFTYMILLIMETRES)
+expect_failure(existing "not empty" standard -o ${WORK}/good)
+file(GLOB leftovers ${WORK}/bad* ${WORK}/*.partial-*)
+if(leftovers)
+  message(FATAL_ERROR "failed runs left output behind: ${leftovers}")
+endif()
+if(NOT EXISTS ${WORK}/good/volume.mha)
+  message(FATAL_ERROR "a refused run damaged the existing output")
+endif()
+
+execute_process(COMMAND ${TOOL} phantom folded -o ${WORK}/good --format dicom --force --mesh-spacing 0.5
+  RESULT_VARIABLE result ERROR_VARIABLE error OUTPUT_QUIET)
+file(GLOB slices ${WORK}/good/volume/*.dcm)
+list(LENGTH slices count)
+if(NOT result EQUAL 0 OR count LESS 50 OR EXISTS ${WORK}/good/volume.mha)
+  message(FATAL_ERROR "--force did not replace the output (${result}, ${count} slices): ${error}")
+endif()

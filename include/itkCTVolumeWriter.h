@@ -1,0 +1,117 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkCTVolumeWriter_h
+#define itkCTVolumeWriter_h
+
+#include "VirtualUnwrappingExport.h"
+#include "itkImage.h"
+#include "itkObject.h"
+#include "itkObjectFactory.h"
+
+#include <string>
+
+namespace itk {
+/** \class CTVolumeWriter
+ * \brief Writes a CT volume in Hounsfield units the way scanners and archives deliver
+ * them: a DICOM CT series, a 16-bit TIFF stack, or a single MetaImage / NRRD file.
+ *
+ * Formats (Format):
+ * - Dicom: FileName is a directory; one CT Image Storage file per slice, IMnnnnn.dcm,
+ *   numbered in a shuffled order (seeded by Seed) so that readers must sort by position.
+ *   Pixels are int16 stored values with RescaleSlope 1 and RescaleIntercept -1024 (HU =
+ *   stored - 1024); every file carries ImagePositionPatient of its slice,
+ *   ImageOrientationPatient from the direction, PixelSpacing, SliceThickness and
+ *   SpacingBetweenSlices, InstanceNumber, one StudyInstanceUID, SeriesInstanceUID and
+ *   FrameOfReferenceUID, and SeriesDescription;
+ * - Tiff: FileName is a directory; slice_0000.tif, slice_0001.tif ... in slice order,
+ *   unsigned 16-bit, value = HU + 1024 (so HU below -1024, air noise, is clipped to
+ *   -1024 as scanners do). TIFF keeps no 3D geometry: give the spacing to
+ *   the reader (the phantom tool records it in its JSON);
+ * - MetaImage (.mha) and Nrrd (.nrrd): FileName is the file; int16 HU, zlib-compressed,
+ *   with origin, spacing and direction.
+ * Values are rounded to whole HU and clamped to the range of the stored type. Directories
+ * are created when missing. Throws itk::ExceptionObject without an input, file name, or
+ * when writing fails.
+ *
+ * \ingroup VirtualUnwrapping
+ */
+class VirtualUnwrapping_EXPORT CTVolumeWriter : public Object
+{
+public:
+  ITK_DISALLOW_COPY_AND_MOVE(CTVolumeWriter);
+
+  using Self = CTVolumeWriter;
+  using Superclass = Object;
+  using Pointer = SmartPointer<Self>;
+  using ConstPointer = SmartPointer<const Self>;
+  using ImageType = Image<float, 3>;
+
+  enum class FormatType
+  {
+    Dicom,
+    Tiff,
+    MetaImage,
+    Nrrd
+  };
+
+  itkNewMacro(Self);
+  itkTypeMacro(CTVolumeWriter, Object);
+
+  /** "dicom", "tiff", "mha" or "nrrd"; throws on anything else. */
+  static FormatType
+  FormatFromString(const std::string & name);
+  static const char *
+  FormatName(FormatType format);
+
+  itkSetConstObjectMacro(Input, ImageType);
+  itkGetConstObjectMacro(Input, ImageType);
+  itkSetStringMacro(FileName);
+  itkGetStringMacro(FileName);
+  itkSetEnumMacro(Format, FormatType);
+  itkGetEnumMacro(Format, FormatType);
+  itkSetStringMacro(SeriesDescription);
+  itkGetStringMacro(SeriesDescription);
+  itkSetMacro(Seed, uint32_t);
+  itkGetConstMacro(Seed, uint32_t);
+
+  void
+  Write();
+
+protected:
+  CTVolumeWriter() = default;
+  ~CTVolumeWriter() override = default;
+  void
+  PrintSelf(std::ostream & os, Indent indent) const override;
+
+private:
+  void
+  WriteDicom() const;
+  void
+  WriteTiff() const;
+  void
+  WriteSingleFile() const;
+
+  ImageType::ConstPointer m_Input;
+  std::string             m_FileName;
+  FormatType              m_Format{ FormatType::Dicom };
+  std::string             m_SeriesDescription{ "VirtualUnwrapping sheet phantom" };
+  uint32_t                m_Seed{ 1 };
+};
+} // end namespace itk
+
+#endif

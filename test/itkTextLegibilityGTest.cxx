@@ -1,0 +1,132 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkSheetPhantomSource.h"
+#include "itkTextLegibility.h"
+#include "vuTestHelpers.h"
+
+#include "gtest/gtest.h"
+
+namespace {
+using Legibility = itk::TextLegibility;
+
+// Ink image of a short sentence rendered by the phantom source (no volume is made).
+const itk::SheetPhantomGeometry::InkImageType *
+RenderInk(itk::SheetPhantomSource * source, const std::string & text)
+{
+  source->SetText(text);
+  source->UpdateOutputInformation();
+  return source->GetGeometry().GetInkImage();
+}
+} // namespace
+
+TEST(TextLegibility, BasicObjectMethods)
+{
+  auto legibility = Legibility::New();
+  VU_EXPECT_ITK_MACROS(ITK_EXERCISE_BASIC_OBJECT_METHODS(legibility, TextLegibility, Object));
+  VU_EXPECT_ITK_MACROS(ITK_TEST_SET_GET_BOOLEAN(legibility, InkIsBright, false));
+  VU_EXPECT_ITK_MACROS(ITK_TEST_SET_GET_VALUE(2.0, legibility->GetUpscaleFactor()); legibility->SetUpscaleFactor(3.0);
+                       ITK_TEST_SET_GET_VALUE(3.0, legibility->GetUpscaleFactor()));
+  legibility->SetUpscaleFactor(100.0);
+  EXPECT_EQ(legibility->GetUpscaleFactor(), 8.0);
+  legibility->SetPageSegmentationMode(4);
+  EXPECT_EQ(legibility->GetPageSegmentationMode(), 4);
+}
+
+TEST(TextLegibility, NormalizesWhitespace)
+{
+  EXPECT_EQ(Legibility::NormalizeText("  THE\tQUICK \n\n BROWN\r\nFOX \f"), "THE QUICK BROWN FOX");
+  EXPECT_EQ(Legibility::NormalizeText("\n \t"), "");
+  EXPECT_EQ(Legibility::NormalizeText("Case, kept."), "Case, kept.");
+}
+
+TEST(TextLegibility, EditDistanceOfKnownPairs)
+{
+  EXPECT_EQ(Legibility::ComputeEditDistance("kitten", "sitting"), 3u);
+  EXPECT_EQ(Legibility::ComputeEditDistance("", "abc"), 3u);
+  EXPECT_EQ(Legibility::ComputeEditDistance("abc", ""), 3u);
+  EXPECT_EQ(Legibility::ComputeEditDistance("flaw", "lawn"), 2u);
+  EXPECT_EQ(Legibility::ComputeEditDistance("same", "same"), 0u);
+  // Code points, not bytes: one substitution of a two-byte character.
+  EXPECT_EQ(Legibility::ComputeEditDistance("caf\xC3\xA9", "cafe"), 1u);
+  EXPECT_THROW(Legibility::ComputeEditDistance("\xC3", "a"), itk::ExceptionObject);
+}
+
+TEST(TextLegibility, CharacterErrorRateOfKnownCases)
+{
+  EXPECT_DOUBLE_EQ(Legibility::ComputeCharacterErrorRate("HELLO WORLD", "HELLO WORLD"), 0.0);
+  // Line breaks and repeated spaces are not errors.
+  EXPECT_DOUBLE_EQ(Legibility::ComputeCharacterErrorRate("HELLO\n  WORLD\n\f", "HELLO WORLD"), 0.0);
+  EXPECT_DOUBLE_EQ(Legibility::ComputeCharacterErrorRate("HELL0 WORLD", "HELLO WORLD"), 1.0 / 11.0);
+  EXPECT_DOUBLE_EQ(Legibility::ComputeCharacterErrorRate("HELLO", "HELLO WORLD"), 6.0 / 11.0);
+  EXPECT_DOUBLE_EQ(Legibility::ComputeCharacterErrorRate("", "ABCD"), 1.0);
+  EXPECT_DOUBLE_EQ(Legibility::ComputeCharacterErrorRate("ABCD EFGH", "AB"), 3.5);
+  EXPECT_DOUBLE_EQ(Legibility::ComputeCharacterErrorRate("hello world", "HELLO WORLD"), 10.0 / 11.0);
+  EXPECT_THROW(Legibility::ComputeCharacterErrorRate("ABC", " \n "), itk::ExceptionObject);
+}
+
+TEST(TextLegibility, ReadsRenderedText)
+{
+  auto legibility = Legibility::New();
+  if (!legibility->IsTesseractAvailable())
+  {
+    GTEST_SKIP() << "tesseract is not installed";
+  }
+  auto              source = itk::SheetPhantomSource::New();
+  const std::string text = "THE QUICK BROWN FOX";
+  legibility->SetImage(RenderInk(source, text));
+  legibility->SetTruthText(text);
+  legibility->Compute();
+  EXPECT_EQ(Legibility::NormalizeText(legibility->GetRecognizedText()), text);
+  EXPECT_EQ(legibility->GetCharacterErrorRate(), 0.0);
+
+  // Dark ink on a bright sheet reads the same with InkIsBright off.
+  const auto * ink = source->GetGeometry().GetInkImage();
+  auto         dark = itk::SheetPhantomGeometry::InkImageType::New();
+  dark->CopyInformation(ink);
+  dark->SetRegions(ink->GetLargestPossibleRegion());
+  dark->Allocate();
+  for (size_t i = 0; i < dark->GetLargestPossibleRegion().GetNumberOfPixels(); ++i)
+  {
+    dark->GetBufferPointer()[i] = 1.0f - ink->GetBufferPointer()[i];
+  }
+  legibility->SetImage(dark);
+  legibility->InkIsBrightOff();
+  legibility->Compute();
+  EXPECT_EQ(Legibility::NormalizeText(legibility->GetRecognizedText()), text);
+}
+
+TEST(TextLegibility, ReportsMissingTesseractAndMissingImage)
+{
+  auto legibility = Legibility::New();
+  EXPECT_THROW(legibility->Compute(), itk::ExceptionObject);
+  auto source = itk::SheetPhantomSource::New();
+  legibility->SetImage(RenderInk(source, "ABC"));
+  legibility->SetTesseractExecutable("/nonexistent/tesseract");
+  EXPECT_FALSE(legibility->IsTesseractAvailable());
+  try
+  {
+    legibility->Compute();
+    ADD_FAILURE() << "no exception";
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    EXPECT_NE(std::string(e.GetDescription()).find("tesseract-ocr"), std::string::npos);
+  }
+  legibility->SetTesseractExecutable("vu-no-such-tesseract-program");
+  EXPECT_THROW(legibility->Compute(), itk::ExceptionObject);
+}
