@@ -131,6 +131,28 @@ public:
     return m_SpringI.size();
   }
 
+  /** The springs: end particles, rest lengths and stiffnesses, in the order added. */
+  const std::vector<uint32_t> &
+  GetSpringFirstParticles() const
+  {
+    return m_SpringI;
+  }
+  const std::vector<uint32_t> &
+  GetSpringSecondParticles() const
+  {
+    return m_SpringJ;
+  }
+  const std::vector<double> &
+  GetSpringRestLengths() const
+  {
+    return m_RestLength;
+  }
+  const std::vector<double> &
+  GetSpringStiffnesses() const
+  {
+    return m_Stiffness;
+  }
+
   const std::vector<double> &
   GetPositions() const
   {
