@@ -39,7 +39,8 @@ namespace itk {
  *
  * The work is done by MassSpringSheetFlattener (see it for the model, the phases and every
  * parameter); this filter exposes its parameters, with the same names, defaults and ranges:
- * Integrator (ImplicitEuler), TimeStep (0: automatic), TimeStepSafety (0.5), Stiffness (1),
+ * Integrator (ImplicitEuler), TimeStep (0: automatic), StepsPerFallTime (40),
+ * TimeStepSafety (0.5), Stiffness (1),
  * ShearStiffnessRatio (0.5), BendingStiffnessRatio (0: off), Density (1), Gravity
  * (0: automatic), HangingStrain (0.01), Damping (-1: automatic), SpringDamping (0),
  * Restitution (0.1, in [0, 1]), LockedEdge (OuterEdge), LockedParticles,
@@ -79,6 +80,8 @@ public:
   itkGetEnumMacro(Integrator, IntegratorEnum);
   itkSetClampMacro(TimeStep, double, 0.0, NumericTraits<double>::max());
   itkGetConstMacro(TimeStep, double);
+  itkSetClampMacro(StepsPerFallTime, double, 1e-3, NumericTraits<double>::max());
+  itkGetConstMacro(StepsPerFallTime, double);
   itkSetClampMacro(TimeStepSafety, double, 1e-6, 100.0);
   itkGetConstMacro(TimeStepSafety, double);
   itkSetClampMacro(Stiffness, double, 1e-12, NumericTraits<double>::max());
@@ -176,6 +179,7 @@ private:
   IntegratorEnum        m_Integrator{ IntegratorEnum::ImplicitEuler };
   double                m_TimeStep{ 0.0 };
   double                m_TimeStepSafety{ 0.5 };
+  double                m_StepsPerFallTime{ 40.0 };
   double                m_Stiffness{ 1.0 };
   double                m_ShearStiffnessRatio{ 0.5 };
   double                m_BendingStiffnessRatio{ 0.0 };

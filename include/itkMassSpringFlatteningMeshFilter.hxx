@@ -30,6 +30,7 @@ MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::GetParameters() const
   p.Integrator = m_Integrator;
   p.TimeStep = m_TimeStep;
   p.TimeStepSafety = m_TimeStepSafety;
+  p.StepsPerFallTime = m_StepsPerFallTime;
   p.Stiffness = m_Stiffness;
   p.ShearStiffnessRatio = m_ShearStiffnessRatio;
   p.BendingStiffnessRatio = m_BendingStiffnessRatio;
@@ -134,6 +135,7 @@ MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::PrintSelf(std::ostream 
   os << indent << "Integrator: " << m_Integrator << std::endl;
   os << indent << "TimeStep: " << m_TimeStep << std::endl;
   os << indent << "TimeStepSafety: " << m_TimeStepSafety << std::endl;
+  os << indent << "StepsPerFallTime: " << m_StepsPerFallTime << std::endl;
   os << indent << "Stiffness: " << m_Stiffness << std::endl;
   os << indent << "ShearStiffnessRatio: " << m_ShearStiffnessRatio << std::endl;
   os << indent << "BendingStiffnessRatio: " << m_BendingStiffnessRatio << std::endl;

@@ -53,8 +53,11 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningParameters
    * implicit, quasi-static solver). */
   MassSpringIntegratorEnum Integrator{ MassSpringIntegratorEnum::ImplicitEuler };
   /** Time step; 0: automatic (explicit: TimeStepSafety times the linear stability bound;
-   * implicit: the fall time / 40). */
+   * implicit: the fall time / StepsPerFallTime). */
   double TimeStep{ 0.0 };
+  /** Implicit steps per fall time (time for the sheet to fall its own length) of the
+   * automatic implicit time step. > 0. */
+  double StepsPerFallTime{ 40.0 };
   /** Fraction of the linear stability bound used by the automatic explicit time step. */
   double TimeStepSafety{ 0.5 };
   /** Stiffness of a structural spring of mean length (force per length); a spring of rest

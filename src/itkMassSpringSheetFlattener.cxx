@@ -687,8 +687,8 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   m_Report = MassSpringFlatteningReport();
   const MassSpringFlatteningParameters & p = m_Parameters;
   if (!(p.Restitution >= 0.0 && p.Restitution <= 1.0) || !(p.TimeStep >= 0.0) || !(p.TimeStepSafety > 0.0) ||
-      !(p.Gravity >= 0.0) || !(p.HangingStrain > 0.0) || !(p.PlanarityTolerance > 0.0) || p.MaximumStepsPerPhase == 0 ||
-      !(p.SpringDamping >= 0.0))
+      !(p.StepsPerFallTime > 0.0) || !(p.Gravity >= 0.0) || !(p.HangingStrain > 0.0) || !(p.PlanarityTolerance > 0.0) ||
+      p.MaximumStepsPerPhase == 0 || !(p.SpringDamping >= 0.0))
   {
     itkGenericExceptionMacro(<< "mass-spring flattening: impossible parameters (restitution in [0, 1], time step >= 0, "
                              << "gravity >= 0, hanging strain > 0, step limit >= 1, spring damping >= 0)");
@@ -778,7 +778,7 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   {
     if (p.Integrator == MassSpringIntegratorEnum::ImplicitEuler)
     {
-      timeStep = fallTime / 40.0;
+      timeStep = fallTime / p.StepsPerFallTime;
     }
     else
     {

@@ -1,0 +1,59 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef vuBenchmarkCommon_h
+#define vuBenchmarkCommon_h
+
+// Shared by the flattening benchmarks: the meshes every method flattens and the CSV row
+// each result becomes. Free of ITK and Eigen headers so that a CGAL translation unit (with
+// the system Eigen) can include it.
+#include "itkSheetMesh.h"
+
+#include <ostream>
+#include <string>
+
+namespace vu {
+/** The standard phantom's true mid-surface (a 3-turn roll) with about targetVertices
+ * vertices, as a grid mesh. */
+itk::SheetMesh
+BenchmarkRollMesh(size_t targetVertices);
+/** A spherical cap (non-developable) of about targetVertices vertices. */
+itk::SheetMesh
+BenchmarkDomeMesh(size_t targetVertices);
+/** A mesh by name: roll-10k, roll-100k, roll-1M, dome-10k ... ("roll"/"dome" and a count
+ * with an optional k or M suffix). */
+itk::SheetMesh
+BenchmarkMesh(const std::string & name);
+
+void
+WriteFlatteningCsvHeader(std::ostream & out);
+/** One result: distortion of flat against surface (peers' flat meshes are first scaled by
+ * the uniform factor that best matches edge lengths, since their scale is arbitrary), or
+ * the failure status when flat is empty. */
+void
+WriteFlatteningCsvRow(std::ostream &         out,
+                      const std::string &    meshName,
+                      const itk::SheetMesh & surface,
+                      const itk::SheetMesh & flat,
+                      const std::string &    method,
+                      const std::string &    setting,
+                      double                 seconds,
+                      const std::string &    status,
+                      bool                   rescale);
+} // namespace vu
+
+#endif
