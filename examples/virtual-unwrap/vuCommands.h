@@ -37,6 +37,8 @@ public:
 void
 RegisterDistortionCommand(CLI::App & app);
 void
+RegisterFlattenCommand(CLI::App & app);
+void
 RegisterPhantomCommand(CLI::App & app);
 
 /** Writes text to path atomically: to a temporary name beside it, then renamed, so a

@@ -1,0 +1,208 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "vuSheetMeshIO.h"
+
+#include "itkMesh.h"
+#include "itkMeshFileReader.h"
+#include "itkSheetMeshAdaptor.h"
+#include "vuCommands.h"
+
+#include <vtkCellArray.h>
+#include <vtkFloatArray.h>
+#include <vtkIntArray.h>
+#include <vtkNew.h>
+#include <vtkOBJWriter.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkXMLPolyDataReader.h>
+#include <vtkXMLPolyDataWriter.h>
+
+#include <filesystem>
+
+namespace vu {
+namespace {
+vtkNew<vtkPolyData>
+ToPolyData(const itk::SheetMesh & mesh)
+{
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(static_cast<vtkIdType>(mesh.GetNumberOfPoints()));
+  for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    points->SetPoint(static_cast<vtkIdType>(i), &mesh.Points[3 * i]);
+  }
+  vtkNew<vtkCellArray> triangles;
+  for (size_t t = 0; t < mesh.GetNumberOfTriangles(); ++t)
+  {
+    const vtkIdType ids[3] = { mesh.Triangles[3 * t], mesh.Triangles[3 * t + 1], mesh.Triangles[3 * t + 2] };
+    triangles->InsertNextCell(3, ids);
+  }
+  vtkNew<vtkPolyData> polyData;
+  polyData->SetPoints(points);
+  polyData->SetPolys(triangles);
+  return polyData;
+}
+} // namespace
+
+itk::SheetMesh
+ReadSheetMesh(const std::string & path)
+{
+  if (!std::filesystem::is_regular_file(path))
+  {
+    throw UsageError("mesh file not found: " + path);
+  }
+  itk::SheetMesh sheet;
+  if (std::filesystem::path(path).extension() == ".vtp")
+  {
+    vtkNew<vtkXMLPolyDataReader> reader;
+    reader->SetFileName(path.c_str());
+    reader->Update();
+    vtkPolyData * polyData = reader->GetOutput();
+    if (reader->GetErrorCode() != 0 || polyData == nullptr || polyData->GetNumberOfPoints() == 0)
+    {
+      throw UsageError("cannot read a mesh from " + path);
+    }
+    for (vtkIdType i = 0; i < polyData->GetNumberOfPoints(); ++i)
+    {
+      double p[3];
+      polyData->GetPoint(i, p);
+      sheet.Points.insert(sheet.Points.end(), { p[0], p[1], p[2] });
+    }
+    vtkCellArray * polys = polyData->GetPolys();
+    polys->InitTraversal();
+    vtkIdType         count = 0;
+    const vtkIdType * ids = nullptr;
+    while (polys->GetNextCell(count, ids))
+    {
+      if (count != 3)
+      {
+        throw UsageError(path + ": a polygon is not a triangle");
+      }
+      sheet.Triangles.insert(sheet.Triangles.end(), { uint32_t(ids[0]), uint32_t(ids[1]), uint32_t(ids[2]) });
+    }
+    auto * rows = vtkIntArray::SafeDownCast(polyData->GetPointData()->GetArray("GridRow"));
+    auto * columns = vtkIntArray::SafeDownCast(polyData->GetPointData()->GetArray("GridColumn"));
+    if (rows != nullptr && columns != nullptr)
+    {
+      for (vtkIdType i = 0; i < polyData->GetNumberOfPoints(); ++i)
+      {
+        sheet.GridIndex.insert(sheet.GridIndex.end(), { rows->GetValue(i), columns->GetValue(i) });
+        sheet.GridRows = std::max(sheet.GridRows, rows->GetValue(i) + 1);
+        sheet.GridColumns = std::max(sheet.GridColumns, columns->GetValue(i) + 1);
+      }
+    }
+  }
+  else
+  {
+    using MeshType = itk::Mesh<float, 3>;
+    auto reader = itk::MeshFileReader<MeshType>::New();
+    reader->SetFileName(path);
+    try
+    {
+      reader->Update();
+    }
+    catch (const itk::ExceptionObject & e)
+    {
+      throw UsageError("cannot read a mesh from " + path + ": " + e.GetDescription());
+    }
+    sheet = itk::MeshToSheetMesh(reader->GetOutput());
+  }
+  try
+  {
+    sheet.Validate(path);
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    throw UsageError(e.GetDescription());
+  }
+  return sheet;
+}
+
+void
+WriteSheetMeshObj(const std::string &         path,
+                  const itk::SheetMesh &      mesh,
+                  const std::vector<double> & textureCoordinates,
+                  const std::string &         textureFileName)
+{
+  vtkNew<vtkPolyData> polyData = ToPolyData(mesh);
+  if (!textureCoordinates.empty())
+  {
+    vtkNew<vtkFloatArray> tcoords;
+    tcoords->SetName("TextureCoordinates");
+    tcoords->SetNumberOfComponents(2);
+    tcoords->SetNumberOfTuples(static_cast<vtkIdType>(mesh.GetNumberOfPoints()));
+    for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+    {
+      tcoords->SetTuple2(static_cast<vtkIdType>(i), textureCoordinates[2 * i], textureCoordinates[2 * i + 1]);
+    }
+    polyData->GetPointData()->SetTCoords(tcoords);
+  }
+  vtkNew<vtkOBJWriter> writer;
+  writer->SetInputData(polyData);
+  writer->SetFileName(path.c_str());
+  if (!textureFileName.empty())
+  {
+    writer->SetTextureFileName(textureFileName.c_str());
+  }
+  if (writer->Write() != 1)
+  {
+    throw UsageError("cannot write " + path);
+  }
+}
+
+void
+WriteSheetMeshVtp(const std::string &        path,
+                  const itk::SheetMesh &     mesh,
+                  const std::vector<float> & pointScalars,
+                  const std::string &        scalarName)
+{
+  vtkNew<vtkPolyData> polyData = ToPolyData(mesh);
+  if (mesh.IsGridStructured())
+  {
+    vtkNew<vtkIntArray> rows, columns;
+    rows->SetName("GridRow");
+    columns->SetName("GridColumn");
+    for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+    {
+      rows->InsertNextValue(mesh.GridIndex[2 * i]);
+      columns->InsertNextValue(mesh.GridIndex[2 * i + 1]);
+    }
+    polyData->GetPointData()->AddArray(rows);
+    polyData->GetPointData()->AddArray(columns);
+  }
+  if (!pointScalars.empty())
+  {
+    vtkNew<vtkFloatArray> scalars;
+    scalars->SetName(scalarName.c_str());
+    for (float v : pointScalars)
+    {
+      scalars->InsertNextValue(v);
+    }
+    polyData->GetPointData()->SetScalars(scalars);
+  }
+  vtkNew<vtkXMLPolyDataWriter> writer;
+  writer->SetInputData(polyData);
+  writer->SetFileName(path.c_str());
+  writer->SetDataModeToBinary();
+  if (writer->Write() != 1)
+  {
+    throw UsageError("cannot write " + path);
+  }
+}
+} // namespace vu
