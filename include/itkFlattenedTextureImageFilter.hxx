@@ -265,7 +265,7 @@ FlattenedTextureImageFilter<TImage, TOutputImage, TMesh>::GenerateData()
       clamped += rowClamped;
     },
     progress.GetProcessObject());
-  if (aborted)
+  if (aborted || this->GetAbortGenerateData())
   {
     ProcessAborted e(__FILE__, __LINE__);
     e.SetDescription("FlattenedTextureImageFilter: aborted");

@@ -65,7 +65,8 @@ LayeredTextureMeshFilter<TInputMesh, TImage, TOutputMesh>::GenerateData()
   this->CopyInputMeshToOutputMeshCells();
   this->CopyInputMeshToOutputMeshCellData();
 
-  const SheetMesh           sheet = MeshToSheetMesh(input);
+  const SheetMesh sheet = MeshToSheetMesh(input);
+  sheet.Validate("LayeredTextureMeshFilter: input mesh");
   const std::vector<double> normals = sheet.ComputeVertexNormals();
   const TextureLayers       layers = this->MakeLayers();
   m_Interpolator->SetInputImage(volume);
@@ -107,7 +108,7 @@ LayeredTextureMeshFilter<TInputMesh, TImage, TOutputMesh>::GenerateData()
       zeroNormals += blockZeroNormals;
     },
     this);
-  if (aborted)
+  if (aborted || this->GetAbortGenerateData())
   {
     ProcessAborted e(__FILE__, __LINE__);
     e.SetDescription("LayeredTextureMeshFilter: aborted");
