@@ -212,7 +212,11 @@ FlattenedTextureImageFilter<TImage, TOutputImage, TMesh>::GenerateData()
   stackOutput->SetBufferedRegion(stackOutput->GetRequestedRegion());
   stackOutput->Allocate();
   const TextureLayers layers = this->MakeLayers();
-  m_Interpolator->SetInputImage(volume);
+  // Some interpolators precompute from their image (B-spline coefficients): only when it changed.
+  if (m_Interpolator->GetInputImage() != volume || m_Interpolator->GetMTime() < volume->GetMTime())
+  {
+    m_Interpolator->SetInputImage(volume);
+  }
   const LayeredVolumeSampler<TImage> sampler(volume, m_Interpolator, layers);
 
   const SizeValueType   columns = m_PixelMap.Size[0];

@@ -19,6 +19,7 @@
 #define itkLayeredVolumeSampler_h
 
 #include "itkInterpolateImageFunction.h"
+#include "itkLinearInterpolateImageFunction.h"
 #include "itkTextureLayers.h"
 
 #include <vector>
@@ -34,6 +35,12 @@ namespace itk {
  * (beyond the outer faces of its boundary voxels) are clamped onto the boundary and
  * counted, never read out of bounds. The interpolator must already have the volume as
  * its input; its Evaluate methods are thread-safe, so one sampler serves all threads.
+ *
+ * With ITK's LinearInterpolateImageFunction (the default of the texture filters) the
+ * sampler computes the same trilinear weights itself, straight from the voxel buffer:
+ * the virtual call and the per-sample bounds logic of the generic interpolator cost more
+ * than the interpolation, and the texture filters must sample tens of millions of points
+ * per second. Any other interpolator is called as it is.
  *
  * \ingroup VirtualUnwrapping
  */
@@ -58,12 +65,18 @@ public:
   }
 
 private:
-  const InterpolatorType * m_Interpolator;
-  std::vector<double>      m_Offsets;
-  double                   m_PhysicalToIndex[3][3];
-  double                   m_Origin[3];
-  double                   m_Lower[3];
-  double                   m_Upper[3];
+  float
+  Trilinear(const double index[3]) const;
+
+  const InterpolatorType *           m_Interpolator;
+  const typename TImage::PixelType * m_Buffer{ nullptr };
+  SizeValueType                      m_Stride[3];
+  IndexValueType                     m_Last[3];
+  std::vector<double>                m_Offsets;
+  double                             m_PhysicalToIndex[3][3];
+  double                             m_Origin[3];
+  double                             m_Lower[3];
+  double                             m_Upper[3];
 };
 } // end namespace itk
 

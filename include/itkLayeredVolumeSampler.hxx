@@ -20,6 +20,10 @@
 
 #include "itkLayeredVolumeSampler.h"
 
+#include <algorithm>
+#include <type_traits>
+#include <typeinfo>
+
 namespace itk {
 template <typename TImage>
 LayeredVolumeSampler<TImage>::LayeredVolumeSampler(const TImage *           volume,
@@ -48,7 +52,42 @@ LayeredVolumeSampler<TImage>::LayeredVolumeSampler(const TImage *           volu
     m_Origin[i] = volume->GetOrigin()[i];
     m_Lower[i] = static_cast<double>(region.GetIndex(i));
     m_Upper[i] = static_cast<double>(region.GetIndex(i) + static_cast<IndexValueType>(region.GetSize(i)) - 1);
+    m_Last[i] = static_cast<IndexValueType>(region.GetSize(i)) - 1;
   }
+  m_Stride[0] = 1;
+  m_Stride[1] = region.GetSize(0);
+  m_Stride[2] = region.GetSize(0) * region.GetSize(1);
+  if (typeid(*interpolator) == typeid(LinearInterpolateImageFunction<TImage, double>) &&
+      std::is_arithmetic<typename TImage::PixelType>::value)
+  {
+    m_Buffer = volume->GetBufferPointer();
+  }
+}
+
+template <typename TImage>
+float
+LayeredVolumeSampler<TImage>::Trilinear(const double index[3]) const
+{
+  SizeValueType offset = 0;
+  double        f[3];
+  SizeValueType step[3];
+  for (unsigned int i = 0; i < 3; ++i)
+  {
+    const double c = index[i] - m_Lower[i];
+    // The last voxel is reached as the far corner of the cell before it (weight 1).
+    const IndexValueType base = std::min(static_cast<IndexValueType>(c), std::max<IndexValueType>(m_Last[i] - 1, 0));
+    f[i] = m_Last[i] > 0 ? c - base : 0.0;
+    step[i] = m_Last[i] > 0 ? m_Stride[i] : 0;
+    offset += base * m_Stride[i];
+  }
+  const auto * p = m_Buffer + offset;
+  const double c00 = p[0] + f[0] * (p[step[0]] - p[0]);
+  const double c10 = p[step[1]] + f[0] * (p[step[1] + step[0]] - p[step[1]]);
+  const double c01 = p[step[2]] + f[0] * (p[step[2] + step[0]] - p[step[2]]);
+  const double c11 = p[step[2] + step[1]] + f[0] * (p[step[2] + step[1] + step[0]] - p[step[2] + step[1]]);
+  const double c0 = c00 + f[1] * (c10 - c00);
+  const double c1 = c01 + f[1] * (c11 - c01);
+  return static_cast<float>(c0 + f[2] * (c1 - c0));
 }
 
 template <typename TImage>
@@ -77,7 +116,8 @@ LayeredVolumeSampler<TImage>::Sample(const double point[3], const double normal[
       index[i] = c >= m_Lower[i] ? (c <= m_Upper[i] ? c : m_Upper[i]) : m_Lower[i];
     }
     clamped += outside ? 1 : 0;
-    samples[k] = static_cast<float>(m_Interpolator->EvaluateAtContinuousIndex(index));
+    samples[k] = m_Buffer != nullptr ? Trilinear(index.GetDataPointer())
+                                     : static_cast<float>(m_Interpolator->EvaluateAtContinuousIndex(index));
   }
   return clamped;
 }

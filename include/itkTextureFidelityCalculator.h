@@ -38,10 +38,12 @@ namespace itk {
  *    sheet's edge stays finite) and keeps them out of every measure through masks;
  * 2. for each of the 8 starts (texture mirrored in x or not, times the 4 quarter turns),
  *    places the texture on the reference by the centroids of their valid regions and the
- *    square root of their valid-area ratio (scale), and runs a short coarse registration
- *    (shrink CoarseShrinkFactor, ITK v4 registration: Similarity2DTransform,
- *    CorrelationImageToImageMetricv4, RegularStepGradientDescentOptimizerv4);
- * 3. refines the two starts of highest signed NCC at full resolution;
+ *    square root of their valid-area ratio (scale), searches shifts of up to a quarter of
+ *    the reference's extent on a coarse grid (ExhaustiveOptimizerv4, at half the coarse
+ *    resolution) and runs a short coarse registration (ITK v4 registration:
+ *    Similarity2DTransform, CorrelationImageToImageMetricv4,
+ *    RegularStepGradientDescentOptimizerv4, a regular quarter of the pixels);
+ * 3. refines the two starts of highest signed NCC level by level up to full resolution;
  * 4. resamples the texture onto the reference grid with the best transform (linear
  *    interpolation) and reports the signed NCC over the overlap: the reference pixels
  *    that are valid and map onto valid texture pixels.
@@ -56,8 +58,8 @@ namespace itk {
  * Parameters (defaults; ranges):
  * - AllowMirror (true): also try the mirrored texture;
  * - AllowQuarterTurns (true): start from 0, 90, 180 and 270 degrees, else from 0 only;
- * - CoarseShrinkFactor (4; >= 1): shrink factor of the coarse stage and of the first
- *   refinement level;
+ * - CoarseSize (64; 16 .. 4096): pixels along the reference's longer side at the coarse
+ *   level (the shrink factor follows from it);
  * - NumberOfIterations (100; >= 1): optimizer iterations per level.
  *
  * Throws itk::ExceptionObject when an image is missing or empty, a mask's size differs
@@ -97,8 +99,8 @@ public:
   itkSetMacro(AllowQuarterTurns, bool);
   itkGetConstMacro(AllowQuarterTurns, bool);
   itkBooleanMacro(AllowQuarterTurns);
-  itkSetClampMacro(CoarseShrinkFactor, unsigned int, 1, 64);
-  itkGetConstMacro(CoarseShrinkFactor, unsigned int);
+  itkSetClampMacro(CoarseSize, unsigned int, 16, 4096);
+  itkGetConstMacro(CoarseSize, unsigned int);
   itkSetClampMacro(NumberOfIterations, unsigned int, 1, 100000);
   itkGetConstMacro(NumberOfIterations, unsigned int);
 
@@ -127,7 +129,7 @@ private:
 
   bool         m_AllowMirror{ true };
   bool         m_AllowQuarterTurns{ true };
-  unsigned int m_CoarseShrinkFactor{ 4 };
+  unsigned int m_CoarseSize{ 64 };
   unsigned int m_NumberOfIterations{ 100 };
 
   double                 m_NormalizedCrossCorrelation{ 0.0 };

@@ -230,12 +230,12 @@ AlignTexture(const PreparedImage &             reference,
   if (stage == Stage::TranslationSearch)
   {
     // A grid of shifts two coarse pixels apart over a quarter of the reference's extent
-    // (at most 25 x 25 shifts), for textures that cover only part of the sheet.
+    // (at most 17 x 17 shifts), for textures that cover only part of the sheet.
     const auto   size = reference.Image->GetLargestPossibleRegion().GetSize();
     const double extent =
       std::max(size[0] * reference.Image->GetSpacing()[0], size[1] * reference.Image->GetSpacing()[1]);
     const double step = 2.0 * pixel * shrinkFactors.front();
-    const auto   steps = static_cast<unsigned int>(std::min(12.0, std::ceil(0.25 * extent / step)));
+    const auto   steps = static_cast<unsigned int>(std::min(8.0, std::ceil(0.25 * extent / step)));
     ExhaustiveOptimizerv4<double>::StepsType numberOfSteps(4);
     numberOfSteps[0] = numberOfSteps[1] = 0;
     numberOfSteps[2] = numberOfSteps[3] = steps;
@@ -286,6 +286,14 @@ AlignTexture(const PreparedImage &             reference,
   registration->SetShrinkFactorsPerLevel(shrink);
   registration->SetSmoothingSigmasPerLevel(sigmas);
   registration->SetSmoothingSigmasAreSpecifiedInPhysicalUnits(false);
+  if (stage == Stage::GradientDescent)
+  {
+    // A regular quarter of the points, reproducibly jittered: as accurate here and four
+    // times cheaper.
+    registration->SetMetricSamplingStrategy(RegistrationType::MetricSamplingStrategyEnum::REGULAR);
+    registration->SetMetricSamplingPercentage(0.25);
+    registration->MetricSamplingReinitializeSeed(20040607);
+  }
   registration->Update();
   if (stage == Stage::TranslationSearch)
   {
@@ -305,6 +313,12 @@ TextureFidelityCalculator::Compute()
 {
   const PreparedImage        reference = Prepare(m_Reference, m_ReferenceMask, "reference");
   std::vector<PreparedImage> textures{ Prepare(m_Texture, m_TextureMask, "texture") };
+  const auto                 referenceSize = reference.Image->GetLargestPossibleRegion().GetSize();
+  // The coarse level has at most CoarseSize pixels along the reference's longer side.
+  const auto coarseShrink =
+    std::max(1u,
+             static_cast<unsigned int>(
+               std::ceil(static_cast<double>(std::max(referenceSize[0], referenceSize[1])) / m_CoarseSize)));
   if (m_AllowMirror)
   {
     MaskType::ConstPointer mirroredMask;
@@ -339,11 +353,11 @@ TextureFidelityCalculator::Compute()
       translation[1] = textures[t].Centroid[1] - reference.Centroid[1];
       start->SetTranslation(translation);
       TransformType::Pointer shifted =
-        AlignTexture(reference, textures[t], start, { 2 * m_CoarseShrinkFactor }, Stage::TranslationSearch, 0);
+        AlignTexture(reference, textures[t], start, { 2 * coarseShrink }, Stage::TranslationSearch, 0);
       TransformType::Pointer coarse = AlignTexture(reference,
                                                    textures[t],
                                                    shifted,
-                                                   { m_CoarseShrinkFactor },
+                                                   { coarseShrink },
                                                    Stage::GradientDescent,
                                                    std::max(1u, m_NumberOfIterations / 2));
       Score                  coarseScore = Evaluate(reference, textures[t], coarse);
@@ -365,7 +379,7 @@ TextureFidelityCalculator::Compute()
   });
   candidates.resize(std::min<size_t>(2, candidates.size()));
   std::vector<unsigned int> refinement;
-  for (unsigned int shrink = m_CoarseShrinkFactor; shrink > 1; shrink /= 2)
+  for (unsigned int shrink = coarseShrink / 2; shrink > 1; shrink /= 2)
   {
     refinement.push_back(shrink);
   }
@@ -414,7 +428,7 @@ TextureFidelityCalculator::PrintSelf(std::ostream & os, Indent indent) const
   itkPrintSelfObjectMacro(TextureMask);
   os << indent << "AllowMirror: " << m_AllowMirror << std::endl;
   os << indent << "AllowQuarterTurns: " << m_AllowQuarterTurns << std::endl;
-  os << indent << "CoarseShrinkFactor: " << m_CoarseShrinkFactor << std::endl;
+  os << indent << "CoarseSize: " << m_CoarseSize << std::endl;
   os << indent << "NumberOfIterations: " << m_NumberOfIterations << std::endl;
   os << indent << "NormalizedCrossCorrelation: " << m_NormalizedCrossCorrelation << std::endl;
   os << indent << "Mirrored: " << m_Mirrored << std::endl;

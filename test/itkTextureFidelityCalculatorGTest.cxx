@@ -100,8 +100,10 @@ TEST(TextureFidelityCalculator, BasicObjectMethods)
   VU_EXPECT_ITK_MACROS(ITK_EXERCISE_BASIC_OBJECT_METHODS(calculator, TextureFidelityCalculator, Object));
   VU_EXPECT_ITK_MACROS(ITK_TEST_SET_GET_BOOLEAN(calculator, AllowMirror, false));
   VU_EXPECT_ITK_MACROS(ITK_TEST_SET_GET_BOOLEAN(calculator, AllowQuarterTurns, false));
-  calculator->SetCoarseShrinkFactor(8);
-  EXPECT_EQ(calculator->GetCoarseShrinkFactor(), 8u);
+  calculator->SetCoarseSize(128);
+  EXPECT_EQ(calculator->GetCoarseSize(), 128u);
+  calculator->SetCoarseSize(2);
+  EXPECT_EQ(calculator->GetCoarseSize(), 16u);
   calculator->SetNumberOfIterations(50);
   EXPECT_EQ(calculator->GetNumberOfIterations(), 50u);
 }

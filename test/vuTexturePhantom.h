@@ -120,6 +120,7 @@ struct PhantomSettings
   double Ink{ 1.0 };         // attenuation of inked sheet
   double BlurSigma{ 0.25 };  // scanner blur, mm
   double NoiseSigma{ 0.03 }; // additive Gaussian noise
+  int    Subsamples{ 3 };    // partial volume: Subsamples^3 points averaged per voxel
 };
 
 /** Ink in the outer voxel of a 2.5 mm sheet (d in [0.75, 1.25] mm, 1.5 to 2.5 voxels
@@ -134,7 +135,7 @@ FaceInkSettings()
   return settings;
 }
 
-/** A scan of the sheet: each voxel averages 3 x 3 x 3 sub-samples (partial volume), then
+/** A scan of the sheet: each voxel averages Subsamples^3 points (partial volume), then
  * Gaussian blur and noise with a fixed seed. */
 inline VolumeType::Pointer
 MakeVolume(const double             origin[3],
@@ -155,8 +156,8 @@ MakeVolume(const double             origin[3],
   }
   volume->SetOrigin(o);
   volume->Allocate();
-  float *       buffer = volume->GetBufferPointer();
-  constexpr int sub = 3;
+  float *   buffer = volume->GetBufferPointer();
+  const int sub = settings.Subsamples;
   for (itk::SizeValueType k = 0; k < size[2]; ++k)
   {
     for (itk::SizeValueType j = 0; j < size[1]; ++j)
@@ -328,14 +329,13 @@ MakeTiltedPlaneVolume(const TiltedPlane & plane, const PhantomSettings & setting
     settings);
 }
 
-/** The cylinder-shell phantom: volume of 0.5 mm voxels around the shell. */
+/** The cylinder-shell phantom: a volume of voxels of side voxel (mm) around the shell. */
 inline VolumeType::Pointer
-MakeCylinderShellVolume(const CylinderShell & shell, const PhantomSettings & settings)
+MakeCylinderShellVolume(const CylinderShell & shell, const PhantomSettings & settings, double voxel = 0.5)
 {
-  constexpr double voxel = 0.5;
-  const double     extent = shell.Radius + 3.0;
-  const double     origin[3] = { -extent, -extent, -3.0 };
-  itk::Size<3>     size;
+  const double extent = shell.Radius + 3.0;
+  const double origin[3] = { -extent, -extent, -3.0 };
+  itk::Size<3> size;
   size[0] = size[1] = static_cast<itk::SizeValueType>(2.0 * extent / voxel) + 1;
   size[2] = static_cast<itk::SizeValueType>((SheetHeight + 6.0) / voxel) + 1;
   return MakeVolume(
