@@ -43,7 +43,8 @@ namespace itk {
  *    resolution) and runs a short coarse registration (ITK v4 registration:
  *    Similarity2DTransform, CorrelationImageToImageMetricv4,
  *    RegularStepGradientDescentOptimizerv4, a regular quarter of the pixels);
- * 3. refines the two starts of highest signed NCC level by level up to full resolution;
+ * 3. refines the start of highest signed NCC (and the runner-up when its NCC is within
+ *    80 % of the best) level by level up to full resolution;
  * 4. resamples the texture onto the reference grid with the best transform (linear
  *    interpolation) and reports the signed NCC over the overlap: the reference pixels
  *    that are valid and map onto valid texture pixels.

@@ -377,7 +377,9 @@ TextureFidelityCalculator::Compute()
   std::sort(candidates.begin(), candidates.end(), [](const Candidate & a, const Candidate & b) {
     return a.Result.NCC > b.Result.NCC;
   });
-  candidates.resize(std::min<size_t>(2, candidates.size()));
+  // The runner-up is refined too unless the coarse stage already ruled it out.
+  const bool close = candidates.size() > 1 && candidates[1].Result.NCC > 0.8 * candidates[0].Result.NCC;
+  candidates.resize(close ? 2 : 1);
   std::vector<unsigned int> refinement;
   for (unsigned int shrink = coarseShrink / 2; shrink > 1; shrink /= 2)
   {

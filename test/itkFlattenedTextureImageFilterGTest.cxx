@@ -233,6 +233,7 @@ TEST(FlattenedTextureImageFilter, FlatSheetTextureMatchesInk)
   filter->SetLayerSpacing(0.5);
   filter->Update();
   WriteTexture(filter, "FlattenedTexture_FlatSheet");
+  itk::WriteImage(vu::MakeInkImage(PixelSize), std::string(VU_BINARY_DIR) + "/FlattenedTexture_Ink.mha");
   const auto * texture = filter->GetOutput();
   EXPECT_NEAR(texture->GetOrigin()[0], 0.0, 1e-9);
   EXPECT_NEAR(texture->GetOrigin()[1], 0.0, 1e-9);
