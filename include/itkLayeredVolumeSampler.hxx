@@ -65,29 +65,31 @@ LayeredVolumeSampler<TImage>::LayeredVolumeSampler(const TImage *           volu
 }
 
 template <typename TImage>
-float
+inline float
 LayeredVolumeSampler<TImage>::Trilinear(const double index[3]) const
 {
   SizeValueType offset = 0;
-  double        f[3];
+  float         f[3];
   SizeValueType step[3];
   for (unsigned int i = 0; i < 3; ++i)
   {
     const double c = index[i] - m_Lower[i];
     // The last voxel is reached as the far corner of the cell before it (weight 1).
     const IndexValueType base = std::min(static_cast<IndexValueType>(c), std::max<IndexValueType>(m_Last[i] - 1, 0));
-    f[i] = m_Last[i] > 0 ? c - base : 0.0;
+    f[i] = m_Last[i] > 0 ? static_cast<float>(c - base) : 0.0f;
     step[i] = m_Last[i] > 0 ? m_Stride[i] : 0;
     offset += base * m_Stride[i];
   }
+  // Single precision: the voxels are floats, and the weights need no more.
   const auto * p = m_Buffer + offset;
-  const double c00 = p[0] + f[0] * (p[step[0]] - p[0]);
-  const double c10 = p[step[1]] + f[0] * (p[step[1] + step[0]] - p[step[1]]);
-  const double c01 = p[step[2]] + f[0] * (p[step[2] + step[0]] - p[step[2]]);
-  const double c11 = p[step[2] + step[1]] + f[0] * (p[step[2] + step[1] + step[0]] - p[step[2] + step[1]]);
-  const double c0 = c00 + f[1] * (c10 - c00);
-  const double c1 = c01 + f[1] * (c11 - c01);
-  return static_cast<float>(c0 + f[2] * (c1 - c0));
+  const auto   at = [p](SizeValueType o) { return static_cast<float>(p[o]); };
+  const float  c00 = at(0) + f[0] * (at(step[0]) - at(0));
+  const float  c10 = at(step[1]) + f[0] * (at(step[1] + step[0]) - at(step[1]));
+  const float  c01 = at(step[2]) + f[0] * (at(step[2] + step[0]) - at(step[2]));
+  const float  c11 = at(step[2] + step[1]) + f[0] * (at(step[2] + step[1] + step[0]) - at(step[2] + step[1]));
+  const float  c0 = c00 + f[1] * (c10 - c00);
+  const float  c1 = c01 + f[1] * (c11 - c01);
+  return c0 + f[2] * (c1 - c0);
 }
 
 template <typename TImage>
