@@ -33,6 +33,11 @@ itk_module(VirtualUnwrapping
     ITKBinaryMathematicalMorphology
     ITKMathematicalMorphology
     ITKDistanceMap
+    ITKSpatialObjects
+    ITKRegistrationMethodsv4
+    ITKMetricsv4
+    ITKOptimizersv4
+    ITKTransform
   TEST_DEPENDS
     ITKTestKernel
     ITKGoogleTest

@@ -75,6 +75,14 @@ struct VirtualUnwrapping_EXPORT SheetMesh
   /** Area of each triangle. */
   std::vector<double>
   ComputeTriangleAreas() const;
+
+  /** Unit normal per point (x, y, z triples): the sum of the normals of the triangles
+   * around the point weighted by their areas (the unnormalised cross products), then
+   * normalised. Orientation follows the triangles' winding (counter-clockwise seen from
+   * the normal's side). A point whose weighted sum vanishes (isolated, only degenerate
+   * triangles, or opposing triangles that cancel) gets (0, 0, 0). */
+  std::vector<double>
+  ComputeVertexNormals() const;
 };
 
 /** True when both meshes have the same number of points and identical triangles. */

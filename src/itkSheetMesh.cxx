@@ -111,6 +111,46 @@ SheetMesh::ComputeTriangleAreas() const
   return areas;
 }
 
+std::vector<double>
+SheetMesh::ComputeVertexNormals() const
+{
+  std::vector<double> normals(Points.size(), 0.0);
+  for (size_t t = 0; t < GetNumberOfTriangles(); ++t)
+  {
+    const uint32_t * tri = &Triangles[3 * t];
+    const double *   p = &Points[3 * tri[0]];
+    const double *   q = &Points[3 * tri[1]];
+    const double *   r = &Points[3 * tri[2]];
+    const double     u[3] = { q[0] - p[0], q[1] - p[1], q[2] - p[2] };
+    const double     v[3] = { r[0] - p[0], r[1] - p[1], r[2] - p[2] };
+    // The cross product's length is twice the area: summing it weights by area.
+    const double c[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0] };
+    for (int k = 0; k < 3; ++k)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        normals[3 * tri[k] + d] += c[d];
+      }
+    }
+  }
+  for (size_t i = 0; i < GetNumberOfPoints(); ++i)
+  {
+    double *     n = &normals[3 * i];
+    const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (length > 0.0 && std::isfinite(length))
+    {
+      n[0] /= length;
+      n[1] /= length;
+      n[2] /= length;
+    }
+    else
+    {
+      n[0] = n[1] = n[2] = 0.0;
+    }
+  }
+  return normals;
+}
+
 bool
 HaveSameTopology(const SheetMesh & a, const SheetMesh & b)
 {

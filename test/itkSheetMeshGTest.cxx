@@ -21,6 +21,9 @@
 
 #include "gtest/gtest.h"
 
+#include <cmath>
+#include <limits>
+
 namespace {
 itk::SheetMesh
 UnitSquare()
@@ -74,4 +77,53 @@ TEST(SheetMesh, TopologyComparison)
   EXPECT_TRUE(itk::HaveSameTopology(a, b));
   b.Triangles = { 0, 1, 3, 1, 2, 3 };
   EXPECT_FALSE(itk::HaveSameTopology(a, b));
+}
+
+TEST(SheetMesh, VertexNormalsAreAreaWeighted)
+{
+  // A flat triangle in z = 0 joined along the edge (1, 2) to a larger roof rising at 45
+  // degrees: normals of points on the shared edge lean towards the larger roof.
+  itk::SheetMesh mesh;
+  mesh.Points = { 0, 0, 0, 1, 0, 0, 1, 1, 0, 3, 0, 2, 3, 2, 2 };
+  mesh.Triangles = { 0, 1, 2, 1, 3, 4, 1, 4, 2 };
+  const std::vector<double> normals = mesh.ComputeVertexNormals();
+  ASSERT_EQ(normals.size(), 15u);
+  EXPECT_NEAR(normals[0], 0.0, 1e-12);
+  EXPECT_NEAR(normals[1], 0.0, 1e-12);
+  EXPECT_NEAR(normals[2], 1.0, 1e-12);
+  // Point 2 touches the flat triangle (area 0.5, normal +z) and the roof triangle
+  // (1, 4, 2) (area sqrt(2), normal (-1, 0, 1) / sqrt(2)): weighted sum (-1, 0, 1.5).
+  const double length = std::sqrt(1.0 + 2.25);
+  EXPECT_NEAR(normals[6], -1.0 / length, 1e-12);
+  EXPECT_NEAR(normals[7], 0.0, 1e-12);
+  EXPECT_NEAR(normals[8], 1.5 / length, 1e-12);
+  for (size_t i = 0; i < 5; ++i)
+  {
+    EXPECT_NEAR(normals[3 * i] * normals[3 * i] + normals[3 * i + 1] * normals[3 * i + 1] +
+                  normals[3 * i + 2] * normals[3 * i + 2],
+                1.0,
+                1e-12);
+  }
+  // Reversing the winding reverses every normal.
+  itk::SheetMesh flipped = mesh;
+  for (size_t t = 0; t < flipped.GetNumberOfTriangles(); ++t)
+  {
+    std::swap(flipped.Triangles[3 * t + 1], flipped.Triangles[3 * t + 2]);
+  }
+  const std::vector<double> reversed = flipped.ComputeVertexNormals();
+  for (size_t k = 0; k < normals.size(); ++k)
+  {
+    EXPECT_NEAR(reversed[k], -normals[k], 1e-12);
+  }
+}
+
+TEST(SheetMesh, VertexNormalOfUnusedPointIsZero)
+{
+  itk::SheetMesh mesh = UnitSquare();
+  mesh.Points.insert(mesh.Points.end(), { 5, 5, 5 });
+  const std::vector<double> normals = mesh.ComputeVertexNormals();
+  EXPECT_EQ(normals[12], 0.0);
+  EXPECT_EQ(normals[13], 0.0);
+  EXPECT_EQ(normals[14], 0.0);
+  EXPECT_NEAR(normals[2], 1.0, 1e-12);
 }

@@ -1,0 +1,392 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkFlattenedTextureImageFilter.h"
+
+#include "itkBSplineInterpolateImageFunction.h"
+#include "itkCommand.h"
+#include "itkImageFileWriter.h"
+#include "itkTextureFidelityCalculator.h"
+#include "vuTestHelpers.h"
+#include "vuTexturePhantom.h"
+
+#include "gtest/gtest.h"
+
+#include <cmath>
+
+namespace {
+using FilterType = itk::FlattenedTextureImageFilter<vu::VolumeType>;
+using Side = itk::TextureLayersEnums::Side;
+using Filter = itk::TextureLayersEnums::Filter;
+
+constexpr double PixelSize = 0.25;
+
+double
+Fidelity(const FilterType * filter)
+{
+  auto calculator = itk::TextureFidelityCalculator::New();
+  calculator->SetReference(vu::MakeInkImage(PixelSize));
+  calculator->SetTexture(filter->GetOutput());
+  calculator->SetTextureMask(filter->GetMaskOutput());
+  calculator->Compute();
+  return calculator->GetNormalizedCrossCorrelation();
+}
+
+FilterType::Pointer
+MakeFilter(const itk::SheetMesh & surface, const itk::SheetMesh & flat, const vu::VolumeType * volume)
+{
+  auto filter = FilterType::New();
+  filter->SetSurfaceMesh(itk::SheetMeshToMesh<vu::MeshType>(surface));
+  filter->SetFlatMesh(itk::SheetMeshToMesh<vu::MeshType>(flat));
+  filter->SetVolume(volume);
+  filter->SetPixelSize(PixelSize);
+  return filter;
+}
+
+// Lets the developer look at a texture: written to the build tree, not compared.
+void
+WriteTexture(const FilterType * filter, const std::string & name)
+{
+  itk::WriteImage(filter->GetOutput(), std::string(VU_BINARY_DIR) + "/" + name + ".mha");
+}
+
+// A volume whose value is its z coordinate, and a horizontal sheet at z = 5 with normal +z:
+// every layer samples exactly z = 5 + offset.
+vu::VolumeType::Pointer
+RampVolume()
+{
+  auto         volume = vu::VolumeType::New();
+  itk::Size<3> size{ { 12, 10, 20 } };
+  volume->SetRegions(size);
+  vu::VolumeType::SpacingType spacing;
+  spacing.Fill(0.5);
+  volume->SetSpacing(spacing);
+  volume->Allocate();
+  for (itk::IndexValueType k = 0; k < 20; ++k)
+  {
+    for (itk::IndexValueType j = 0; j < 10; ++j)
+    {
+      for (itk::IndexValueType i = 0; i < 12; ++i)
+      {
+        volume->SetPixel({ { i, j, k } }, static_cast<float>(0.5 * k));
+      }
+    }
+  }
+  return volume;
+}
+
+itk::SheetMesh
+HorizontalSquare(double z, itk::SheetMesh & flat)
+{
+  itk::SheetMesh mesh;
+  mesh.Points = { 1, 1, z, 4, 1, z, 4, 3.5, z, 1, 3.5, z };
+  mesh.Triangles = { 0, 1, 2, 0, 2, 3 };
+  flat = mesh;
+  for (size_t i = 0; i < 4; ++i)
+  {
+    flat.Points[3 * i] -= 1.0;
+    flat.Points[3 * i + 1] -= 1.0;
+    flat.Points[3 * i + 2] = 0.0;
+  }
+  return mesh;
+}
+
+float
+CentreValue(FilterType * filter)
+{
+  filter->Update();
+  const auto size = filter->GetOutput()->GetLargestPossibleRegion().GetSize();
+  return filter->GetOutput()->GetPixel(
+    { { static_cast<itk::IndexValueType>(size[0] / 2), static_cast<itk::IndexValueType>(size[1] / 2) } });
+}
+} // namespace
+
+TEST(FlattenedTextureImageFilter, BasicObjectMethods)
+{
+  auto filter = FilterType::New();
+  VU_EXPECT_ITK_MACROS(ITK_EXERCISE_BASIC_OBJECT_METHODS(filter, FlattenedTextureImageFilter, ImageSource));
+  filter->SetPixelSize(0.3);
+  filter->SetMargin(1.5);
+  filter->SetNumberOfLayers(7);
+  filter->SetLayerSpacing(0.2);
+  filter->SetFocus(-0.4);
+  filter->SetLayerSide(Side::Negative);
+  filter->SetLayerFilter(Filter::Median);
+  filter->SetGaussianSigma(2.0);
+  EXPECT_EQ(filter->GetPixelSize(), 0.3);
+  EXPECT_EQ(filter->GetMargin(), 1.5);
+  EXPECT_EQ(filter->GetNumberOfLayers(), 7u);
+  EXPECT_EQ(filter->GetLayerSpacing(), 0.2);
+  EXPECT_EQ(filter->GetFocus(), -0.4);
+  EXPECT_EQ(filter->GetLayerSide(), Side::Negative);
+  EXPECT_EQ(filter->GetLayerFilter(), Filter::Median);
+  EXPECT_EQ(filter->GetGaussianSigma(), 2.0);
+  EXPECT_NE(filter->GetInterpolator(), nullptr);
+}
+
+TEST(FlattenedTextureImageFilter, LayersAndFiltersOnARamp)
+{
+  itk::SheetMesh flat;
+  const auto     surface = HorizontalSquare(5.0, flat);
+  auto           filter = MakeFilter(surface, flat, RampVolume());
+  filter->SetPixelSize(0.5);
+  filter->SetNumberOfLayers(5);
+  filter->SetLayerSpacing(0.5);
+  filter->SetFocus(0.25);
+  filter->SetLayerFilter(Filter::Mean);
+  EXPECT_NEAR(CentreValue(filter), 5.25, 1e-5);
+  filter->SetLayerFilter(Filter::Max);
+  EXPECT_NEAR(CentreValue(filter), 6.25, 1e-5);
+  filter->SetLayerFilter(Filter::Min);
+  EXPECT_NEAR(CentreValue(filter), 4.25, 1e-5);
+  filter->SetLayerFilter(Filter::Median);
+  EXPECT_NEAR(CentreValue(filter), 5.25, 1e-5);
+  filter->SetLayerFilter(Filter::SingleLayer);
+  EXPECT_NEAR(CentreValue(filter), 5.25, 1e-5);
+
+  // One side only: layers at focus + k * spacing, or focus - k * spacing.
+  filter->SetLayerSide(Side::Positive);
+  filter->SetNumberOfLayers(4);
+  filter->SetLayerFilter(Filter::Mean);
+  EXPECT_NEAR(CentreValue(filter), 5.25 + 0.75, 1e-5);
+  filter->SetLayerFilter(Filter::GaussianMean);
+  filter->SetGaussianSigma(0.5);
+  double weighted = 0.0, weights = 0.0;
+  for (int k = 0; k < 4; ++k)
+  {
+    const double w = std::exp(-(0.5 * k) * (0.5 * k) / (2.0 * 0.25));
+    weighted += w * (5.25 + 0.5 * k);
+    weights += w;
+  }
+  EXPECT_NEAR(CentreValue(filter), weighted / weights, 1e-5);
+  filter->SetLayerSide(Side::Negative);
+  filter->SetLayerFilter(Filter::Min);
+  EXPECT_NEAR(CentreValue(filter), 5.25 - 1.5, 1e-5);
+
+  // The layer stack holds every layer before combining, its third axis the offset.
+  const auto * stack = filter->GetLayerStackOutput();
+  ASSERT_EQ(stack->GetLargestPossibleRegion().GetSize()[2], 4u);
+  EXPECT_DOUBLE_EQ(stack->GetOrigin()[2], 0.25);
+  EXPECT_DOUBLE_EQ(stack->GetDirection()[2][2], -1.0);
+  for (itk::IndexValueType k = 0; k < 4; ++k)
+  {
+    EXPECT_NEAR(stack->GetPixel({ { 3, 2, k } }), 5.25 - 0.5 * k, 1e-5);
+  }
+
+  // Geometry: pixel centres from the flat bounding box's corner, grown by the margin.
+  filter->SetMargin(1.0);
+  filter->Update();
+  const auto * texture = filter->GetOutput();
+  EXPECT_DOUBLE_EQ(texture->GetOrigin()[0], -1.0);
+  EXPECT_DOUBLE_EQ(texture->GetOrigin()[1], -1.0);
+  EXPECT_DOUBLE_EQ(texture->GetSpacing()[0], 0.5);
+  EXPECT_EQ(texture->GetLargestPossibleRegion().GetSize()[0], 11u); // (3 + 2) / 0.5 + 1
+  EXPECT_EQ(texture->GetLargestPossibleRegion().GetSize()[1], 10u); // (2.5 + 2) / 0.5 + 1
+  EXPECT_TRUE(std::isnan(texture->GetPixel({ { 0, 0 } })));
+  EXPECT_EQ(filter->GetMaskOutput()->GetPixel({ { 0, 0 } }), 0);
+  EXPECT_EQ(filter->GetMaskOutput()->GetPixel({ { 2, 2 } }), 1);
+  EXPECT_EQ(filter->GetNumberOfSheetPixels(), 7u * 6u);
+  EXPECT_EQ(filter->GetNumberOfClampedSamples(), 0u);
+}
+
+TEST(FlattenedTextureImageFilter, PixelMapIsReusedAcrossLayerSettings)
+{
+  itk::SheetMesh flat;
+  const auto     surface = HorizontalSquare(5.0, flat);
+  auto           filter = MakeFilter(surface, flat, RampVolume());
+  filter->Update();
+  const int32_t * first = filter->GetPixelMap().Triangle.data();
+  filter->SetFocus(1.0);
+  filter->SetNumberOfLayers(3);
+  filter->Update();
+  EXPECT_EQ(filter->GetPixelMap().Triangle.data(), first);
+  filter->SetPixelSize(0.2);
+  filter->Update();
+  EXPECT_NE(filter->GetPixelMap().Triangle.size(), 0u);
+  EXPECT_EQ(filter->GetPixelMap().PixelSize, 0.2);
+}
+
+TEST(FlattenedTextureImageFilter, FlatSheetTextureMatchesInk)
+{
+  const vu::TiltedPlane     plane;
+  const vu::PhantomSettings settings; // ink through the whole thickness
+  const auto                volume = vu::MakeTiltedPlaneVolume(plane, settings);
+  itk::SheetMesh            flat;
+  const auto                surface = vu::MakeSheetMesh(
+    9, 7, [&plane](double u, double v) { return plane.At(u, v); }, flat);
+  auto filter = MakeFilter(surface, flat, volume);
+  filter->SetNumberOfLayers(3);
+  filter->SetLayerSpacing(0.5);
+  filter->Update();
+  WriteTexture(filter, "FlattenedTexture_FlatSheet");
+  itk::WriteImage(vu::MakeInkImage(PixelSize), std::string(VU_BINARY_DIR) + "/FlattenedTexture_Ink.mha");
+  const auto * texture = filter->GetOutput();
+  EXPECT_NEAR(texture->GetOrigin()[0], 0.0, 1e-9);
+  EXPECT_NEAR(texture->GetOrigin()[1], 0.0, 1e-9);
+  EXPECT_EQ(texture->GetLargestPossibleRegion().GetSize()[0], 161u);
+  EXPECT_EQ(filter->GetNumberOfSheetPixels(), 161u * 97u);
+  EXPECT_EQ(filter->GetNumberOfClampedSamples(), 0u);
+  EXPECT_EQ(filter->GetNumberOfDegenerateTriangles(), 0u);
+  const double ncc = Fidelity(filter);
+  std::cout << "flat sheet, 3-layer mean, NCC " << ncc << std::endl;
+  EXPECT_GE(ncc, 0.98);
+
+  // A better interpolator on the same map.
+  filter->SetInterpolator(itk::BSplineInterpolateImageFunction<vu::VolumeType, double>::New());
+  filter->Update();
+  const double bsplineNcc = Fidelity(filter);
+  std::cout << "flat sheet, 3-layer mean, cubic B-spline, NCC " << bsplineNcc << std::endl;
+  EXPECT_GE(bsplineNcc, 0.98);
+}
+
+TEST(FlattenedTextureImageFilter, MaxFilterRecoversInkOffTheMidSurface)
+{
+  const vu::TiltedPlane     plane;
+  const vu::PhantomSettings settings = vu::FaceInkSettings();
+  const auto                volume = vu::MakeTiltedPlaneVolume(plane, settings);
+  itk::SheetMesh            flat;
+  const auto                surface = vu::MakeSheetMesh(
+    9, 7, [&plane](double u, double v) { return plane.At(u, v); }, flat);
+  auto filter = MakeFilter(surface, flat, volume);
+  filter->Update();
+  const double single = Fidelity(filter);
+  WriteTexture(filter, "FlattenedTexture_FaceInk_SingleLayer");
+  filter->SetNumberOfLayers(5); // +/- 2 voxels
+  filter->SetLayerSpacing(0.5);
+  filter->SetLayerFilter(Filter::Max);
+  filter->Update();
+  const double max = Fidelity(filter);
+  WriteTexture(filter, "FlattenedTexture_FaceInk_Max5");
+  std::cout << "ink on one face: single layer NCC " << single << ", max of 5 layers NCC " << max << std::endl;
+  EXPECT_LT(single, 0.5);
+  EXPECT_GE(max, 0.95);
+}
+
+TEST(FlattenedTextureImageFilter, CylinderShellWithTrueFlattening)
+{
+  const vu::CylinderShell   shell;
+  const vu::PhantomSettings settings = vu::FaceInkSettings();
+  const auto                volume = vu::MakeCylinderShellVolume(shell, settings);
+  itk::SheetMesh            flat;
+  const auto                surface = vu::MakeSheetMesh(
+    61, 7, [&shell](double u, double v) { return shell.At(u, v); }, flat);
+  auto filter = MakeFilter(surface, flat, volume);
+  filter->SetNumberOfLayers(5);
+  filter->SetLayerSpacing(0.5);
+  filter->SetLayerFilter(Filter::Max);
+  filter->Update();
+  WriteTexture(filter, "FlattenedTexture_CylinderShell_Max5");
+  const double max = Fidelity(filter);
+  // Focused on the inked face: the mean of three layers around 1 mm out.
+  filter->SetFocus(1.0);
+  filter->SetNumberOfLayers(3);
+  filter->SetLayerSpacing(0.25);
+  filter->SetLayerFilter(Filter::Mean);
+  filter->Update();
+  WriteTexture(filter, "FlattenedTexture_CylinderShell_Focus1");
+  const double focused = Fidelity(filter);
+  std::cout << "cylinder shell: max of 5 layers NCC " << max << ", 3-layer mean focused 1 mm out NCC " << focused
+            << std::endl;
+  EXPECT_GE(max, 0.9);
+  EXPECT_GE(focused, 0.95);
+  EXPECT_EQ(filter->GetNumberOfClampedSamples(), 0u);
+}
+
+TEST(FlattenedTextureImageFilter, BadInputThrows)
+{
+  itk::SheetMesh flat;
+  const auto     surface = HorizontalSquare(5.0, flat);
+  const auto     volume = RampVolume();
+
+  itk::SheetMesh otherTopology = flat;
+  otherTopology.Triangles = { 0, 1, 3, 1, 2, 3 };
+  auto filter = MakeFilter(surface, otherTopology, volume);
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject);
+
+  for (int parameter = 0; parameter < 4; ++parameter)
+  {
+    filter = MakeFilter(surface, flat, volume);
+    switch (parameter)
+    {
+      case 0:
+        filter->SetNumberOfLayers(0);
+        break;
+      case 1:
+        filter->SetLayerSpacing(0.0);
+        break;
+      case 2:
+        filter->SetPixelSize(-1.0);
+        break;
+      default:
+        filter->SetMargin(-0.5);
+    }
+    EXPECT_THROW(filter->Update(), itk::ExceptionObject) << "parameter " << parameter;
+  }
+
+  auto noVolume = FilterType::New();
+  noVolume->SetSurfaceMesh(itk::SheetMeshToMesh<vu::MeshType>(surface));
+  noVolume->SetFlatMesh(itk::SheetMeshToMesh<vu::MeshType>(flat));
+  EXPECT_THROW(noVolume->Update(), itk::ExceptionObject);
+}
+
+TEST(FlattenedTextureImageFilter, CountsDegenerateTrianglesZeroNormalsAndClampedSamples)
+{
+  // A sliver triangle (3D area zero) is skipped and counted; the rest is textured.
+  itk::SheetMesh flat;
+  itk::SheetMesh surface = HorizontalSquare(5.0, flat);
+  surface.Points.insert(surface.Points.end(), { 2.5, 2.25, 5 });
+  flat.Points.insert(flat.Points.end(), { 1.5, 1.0, 0 });
+  surface.Triangles.insert(surface.Triangles.end(), { 0, 4, 2 }); // 4 lies on the edge 0-2 in 3D, not in the flat
+  flat.Triangles = surface.Triangles;
+  auto filter = MakeFilter(surface, flat, RampVolume());
+  filter->Update();
+  EXPECT_EQ(filter->GetNumberOfDegenerateTriangles(), 1u);
+  EXPECT_GT(filter->GetNumberOfSheetPixels(), 0u);
+
+  // The same triangle twice with opposite windings: the vertex normals cancel.
+  itk::SheetMesh folded;
+  folded.Points = { 1, 1, 5, 4, 1, 5, 4, 3.5, 5 };
+  folded.Triangles = { 0, 1, 2, 0, 2, 1 };
+  itk::SheetMesh foldedFlat = folded;
+  filter = MakeFilter(folded, foldedFlat, RampVolume());
+  filter->Update();
+  EXPECT_EQ(filter->GetNumberOfSheetPixels(), 0u);
+  EXPECT_GT(filter->GetNumberOfZeroNormalPixels(), 0u);
+
+  // A sheet reaching out of the volume: samples clamped and counted, values finite.
+  itk::SheetMesh outsideFlat;
+  const auto     outside = HorizontalSquare(9.5, outsideFlat);
+  filter = MakeFilter(outside, outsideFlat, RampVolume());
+  filter->SetNumberOfLayers(3);
+  filter->SetLayerSpacing(1.0);
+  EXPECT_NEAR(CentreValue(filter), (8.5 + 9.5 + 9.5) / 3.0, 1e-5);
+  EXPECT_EQ(filter->GetNumberOfClampedSamples(), filter->GetNumberOfSheetPixels());
+}
+
+TEST(FlattenedTextureImageFilter, AbortStopsTheFilter)
+{
+  itk::SheetMesh flat;
+  const auto     surface = HorizontalSquare(5.0, flat);
+  auto           filter = MakeFilter(surface, flat, RampVolume());
+  filter->SetPixelSize(0.01);
+  auto abort = itk::CStyleCommand::New();
+  abort->SetCallback([](itk::Object * caller, const itk::EventObject &, void *) {
+    static_cast<itk::ProcessObject *>(caller)->AbortGenerateDataOn();
+  });
+  filter->AddObserver(itk::ProgressEvent(), abort);
+  EXPECT_THROW(filter->Update(), itk::ProcessAborted);
+}

@@ -1,0 +1,228 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkTextureFidelityCalculator.h"
+
+#include "itkImageFileWriter.h"
+#include "itkImageRegionIteratorWithIndex.h"
+#include "itkLinearInterpolateImageFunction.h"
+#include "vuTestHelpers.h"
+#include "vuTexturePhantom.h"
+
+#include "gtest/gtest.h"
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+namespace {
+using CalculatorType = itk::TextureFidelityCalculator;
+using ImageType = CalculatorType::ImageType;
+using MaskType = CalculatorType::MaskType;
+
+// The ink image seen through a similarity (optionally mirrored in x first) on a grid of
+// another pixel size: what an unwrapping that came out flipped and turned would give.
+// Pixels that map outside the ink image are NaN.
+ImageType::Pointer
+Transformed(const ImageType * ink, bool mirror, double degrees, double pixelSize, const double shift[2])
+{
+  // Texture point y maps to ink point x = R (y - c) + c + shift, mirrored in x after.
+  auto                                          transform = CalculatorType::TransformType::New();
+  CalculatorType::TransformType::InputPointType center;
+  center[0] = 0.5 * vu::SheetLength;
+  center[1] = 0.5 * vu::SheetHeight;
+  transform->SetCenter(center);
+  transform->SetAngle(degrees * M_PI / 180.0);
+  CalculatorType::TransformType::OutputVectorType translation;
+  translation[0] = shift[0];
+  translation[1] = shift[1];
+  transform->SetTranslation(translation);
+
+  auto                texture = ImageType::New();
+  ImageType::SizeType size;
+  const double        extent = std::max(vu::SheetLength, vu::SheetHeight) + 10.0;
+  size.Fill(static_cast<itk::SizeValueType>(extent / pixelSize));
+  texture->SetRegions(size);
+  ImageType::SpacingType spacing;
+  spacing.Fill(pixelSize);
+  texture->SetSpacing(spacing);
+  ImageType::PointType origin;
+  origin[0] = center[0] - 0.5 * extent;
+  origin[1] = center[1] - 0.5 * extent;
+  texture->SetOrigin(origin);
+  texture->Allocate();
+  auto interpolator = itk::LinearInterpolateImageFunction<ImageType, double>::New();
+  interpolator->SetInputImage(ink);
+  for (itk::ImageRegionIteratorWithIndex<ImageType> it(texture, texture->GetBufferedRegion()); !it.IsAtEnd(); ++it)
+  {
+    ImageType::PointType y;
+    texture->TransformIndexToPhysicalPoint(it.GetIndex(), y);
+    ImageType::PointType x = transform->TransformPoint(y);
+    if (mirror)
+    {
+      x[0] = vu::SheetLength - x[0];
+    }
+    it.Set(interpolator->IsInsideBuffer(x) ? static_cast<float>(interpolator->Evaluate(x))
+                                           : std::numeric_limits<float>::quiet_NaN());
+  }
+  return texture;
+}
+
+CalculatorType::Pointer
+Measure(const ImageType * reference, const ImageType * texture, const MaskType * textureMask = nullptr)
+{
+  auto calculator = CalculatorType::New();
+  calculator->SetReference(reference);
+  calculator->SetTexture(texture);
+  calculator->SetTextureMask(textureMask);
+  calculator->Compute();
+  return calculator;
+}
+} // namespace
+
+TEST(TextureFidelityCalculator, BasicObjectMethods)
+{
+  auto calculator = CalculatorType::New();
+  VU_EXPECT_ITK_MACROS(ITK_EXERCISE_BASIC_OBJECT_METHODS(calculator, TextureFidelityCalculator, Object));
+  VU_EXPECT_ITK_MACROS(ITK_TEST_SET_GET_BOOLEAN(calculator, AllowMirror, false));
+  VU_EXPECT_ITK_MACROS(ITK_TEST_SET_GET_BOOLEAN(calculator, AllowQuarterTurns, false));
+  calculator->SetCoarseSize(128);
+  EXPECT_EQ(calculator->GetCoarseSize(), 128u);
+  calculator->SetCoarseSize(2);
+  EXPECT_EQ(calculator->GetCoarseSize(), 16u);
+  calculator->SetNumberOfIterations(50);
+  EXPECT_EQ(calculator->GetNumberOfIterations(), 50u);
+}
+
+TEST(TextureFidelityCalculator, IdenticalImagesCorrelatePerfectly)
+{
+  const auto ink = vu::MakeInkImage(0.25);
+  const auto calculator = Measure(ink, ink);
+  EXPECT_NEAR(calculator->GetNormalizedCrossCorrelation(), 1.0, 1e-3);
+  EXPECT_FALSE(calculator->GetMirrored());
+  EXPECT_NEAR(calculator->GetRotationDegrees(), 0.0, 0.5);
+  EXPECT_NEAR(calculator->GetScale(), 1.0, 0.01);
+  EXPECT_NEAR(calculator->GetOverlapFraction(), 1.0, 0.01);
+}
+
+TEST(TextureFidelityCalculator, FindsMirrorAndQuarterTurnAcrossPixelSizes)
+{
+  const auto   ink = vu::MakeInkImage(0.25);
+  const double shift[2] = { 1.5, -0.8 };
+  const auto   texture = Transformed(ink, true, 90.0, 0.3, shift);
+  const auto   calculator = Measure(ink, texture);
+  std::cout << "mirrored, turned 90 degrees, 0.3 mm pixels: NCC " << calculator->GetNormalizedCrossCorrelation()
+            << ", rotation " << calculator->GetRotationDegrees() << ", scale " << calculator->GetScale() << std::endl;
+  EXPECT_GE(calculator->GetNormalizedCrossCorrelation(), 0.95);
+  EXPECT_TRUE(calculator->GetMirrored());
+  const double turn = std::abs(calculator->GetRotationDegrees());
+  EXPECT_NEAR(turn, 90.0, 1.0);
+  EXPECT_NEAR(calculator->GetScale(), 1.0, 0.01);
+  EXPECT_GE(calculator->GetOverlapFraction(), 0.9);
+
+  // Without the mirror the best alignment is poor.
+  auto noMirror = CalculatorType::New();
+  noMirror->SetReference(ink);
+  noMirror->SetTexture(texture);
+  noMirror->AllowMirrorOff();
+  noMirror->Compute();
+  EXPECT_FALSE(noMirror->GetMirrored());
+  EXPECT_LT(noMirror->GetNormalizedCrossCorrelation(), 0.8);
+}
+
+TEST(TextureFidelityCalculator, SmallRotationAndShiftAreRefined)
+{
+  const auto   ink = vu::MakeInkImage(0.25);
+  const double shift[2] = { -2.0, 1.0 };
+  const auto   calculator = Measure(ink, Transformed(ink, false, 7.0, 0.2, shift));
+  EXPECT_GE(calculator->GetNormalizedCrossCorrelation(), 0.95);
+  EXPECT_FALSE(calculator->GetMirrored());
+  // The transform maps the reference onto the texture: the inverse turn.
+  EXPECT_NEAR(calculator->GetRotationDegrees(), -7.0, 1.0);
+}
+
+TEST(TextureFidelityCalculator, UnrelatedTextureScoresLow)
+{
+  const auto ink = vu::MakeInkImage(0.25);
+  auto       noise = ImageType::New();
+  noise->CopyInformation(ink);
+  noise->SetRegions(ink->GetLargestPossibleRegion());
+  noise->Allocate();
+  std::mt19937                          generator(7);
+  std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+  for (itk::SizeValueType k = 0; k < noise->GetBufferedRegion().GetNumberOfPixels(); ++k)
+  {
+    noise->GetBufferPointer()[k] = uniform(generator);
+  }
+  EXPECT_LT(Measure(ink, noise)->GetNormalizedCrossCorrelation(), 0.3);
+}
+
+TEST(TextureFidelityCalculator, MaskedAndNaNPixelsAreIgnored)
+{
+  const auto ink = vu::MakeInkImage(0.25);
+  auto       texture = ImageType::New();
+  texture->Graft(ink);
+  auto corrupted = ImageType::New();
+  corrupted->CopyInformation(ink);
+  corrupted->SetRegions(ink->GetLargestPossibleRegion());
+  corrupted->Allocate();
+  auto mask = MaskType::New();
+  mask->CopyInformation(ink);
+  mask->SetRegions(ink->GetLargestPossibleRegion());
+  mask->Allocate();
+  const itk::SizeValueType columns = ink->GetLargestPossibleRegion().GetSize(0);
+  for (itk::SizeValueType k = 0; k < ink->GetBufferedRegion().GetNumberOfPixels(); ++k)
+  {
+    const bool stain = k % columns < columns / 4; // a quarter of the sheet ruined
+    const bool hole = k % columns > columns - 10; // and a strip off the sheet
+    corrupted->GetBufferPointer()[k] =
+      hole ? std::numeric_limits<float>::quiet_NaN() : (stain ? 5.0f : ink->GetBufferPointer()[k]);
+    mask->GetBufferPointer()[k] = stain ? 0 : 1;
+  }
+  const auto unmasked = Measure(ink, corrupted);
+  const auto masked = Measure(ink, corrupted, mask);
+  EXPECT_LT(unmasked->GetNormalizedCrossCorrelation(), 0.9);
+  EXPECT_GE(masked->GetNormalizedCrossCorrelation(), 0.99);
+  EXPECT_NEAR(masked->GetOverlapFraction(), 0.72, 0.03);
+  EXPECT_TRUE(std::isnan(masked->GetAlignedTexture()->GetPixel({ { 0, 0 } })));
+}
+
+TEST(TextureFidelityCalculator, BadInputThrows)
+{
+  const auto ink = vu::MakeInkImage(0.25);
+  auto       calculator = CalculatorType::New();
+  calculator->SetReference(ink);
+  EXPECT_THROW(calculator->Compute(), itk::ExceptionObject); // no texture
+
+  auto nan = ImageType::New();
+  nan->CopyInformation(ink);
+  nan->SetRegions(ink->GetLargestPossibleRegion());
+  nan->Allocate();
+  nan->FillBuffer(std::numeric_limits<float>::quiet_NaN());
+  calculator->SetTexture(nan);
+  EXPECT_THROW(calculator->Compute(), itk::ExceptionObject); // no valid pixel
+
+  auto               smallMask = MaskType::New();
+  MaskType::SizeType size;
+  size.Fill(3);
+  smallMask->SetRegions(size);
+  smallMask->Allocate();
+  smallMask->FillBuffer(1);
+  calculator->SetTexture(ink);
+  calculator->SetTextureMask(smallMask);
+  EXPECT_THROW(calculator->Compute(), itk::ExceptionObject); // mask does not cover the image
+}
