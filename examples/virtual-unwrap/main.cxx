@@ -85,6 +85,7 @@ main(int argc, char * argv[])
   app.require_subcommand(1);
   app.get_formatter()->column_width(42);
   vu::RegisterDistortionCommand(app);
+  vu::RegisterInfoCommand(app);
 
   try
   {

@@ -36,6 +36,8 @@ public:
  * throws (itk::ExceptionObject, vu::UsageError or std::exception) on failure. */
 void
 RegisterDistortionCommand(CLI::App & app);
+void
+RegisterInfoCommand(CLI::App & app);
 
 /** Writes text to path atomically: to a temporary name beside it, then renamed, so a
  * failure never leaves a half-written file. */
