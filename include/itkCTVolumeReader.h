@@ -22,6 +22,7 @@
 #include "itkImage.h"
 #include "itkImageSource.h"
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -229,10 +230,17 @@ private:
   /** The internal pipeline (reader, geometry, region of interest, shrinking), kept alive
    * here because a filter's output holds only a weak reference to its source. */
   std::vector<ProcessObject::Pointer> m_Pipeline;
-  /** Stacks and TIFF files carry no trustworthy geometry: origin 0, identity direction. */
-  bool                     m_ReplaceGeometry{ false };
-  OutputImageType::Pointer m_PipelineOutput;
-  bool                     m_IsDicom{ false };
+  /** The geometry given to the volume instead of the one ITK's image IO reports: checked
+   * DICOM header geometry, or for stacks and TIFF files (no trustworthy geometry) origin
+   * 0, 1 mm spacing, identity direction. */
+  bool                           m_ReplaceGeometry{ false };
+  PointType                      m_GeometryOrigin{ 0.0 };
+  SpacingType                    m_GeometrySpacing{ 1.0 };
+  OutputImageType::DirectionType m_GeometryDirection{ OutputImageType::DirectionType::GetIdentity() };
+  OutputImageType::Pointer       m_PipelineOutput;
+  bool                           m_IsDicom{ false };
+  /** Size of the pixel data of one DICOM file, to detect truncated files. */
+  uintmax_t m_DicomPixelBytes{ 0 };
 };
 } // end namespace itk
 

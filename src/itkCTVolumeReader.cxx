@@ -58,6 +58,8 @@ const gdcm::Tag kRescaleSlope(0x0028, 0x1053);
 const gdcm::Tag kBitsAllocated(0x0028, 0x0100);
 const gdcm::Tag kPixelRepresentation(0x0028, 0x0103);
 const gdcm::Tag kGantryTilt(0x0018, 0x1120);
+const gdcm::Tag kFrameIncrementPointer(0x0028, 0x0009);
+const gdcm::Tag kSamplesPerPixel(0x0028, 0x0002);
 
 using OutputImageType = CTVolumeReader::OutputImageType;
 
@@ -88,15 +90,18 @@ private:
   bool m_Error;
 };
 
-/** Throws the message alone (no class name or address in the description), so that the
- * tool can print it as one readable line. */
+/** Throws the message alone (no class name or address in the description) on one line,
+ * so that the tool can print it as one readable line. */
 template <typename... TParts>
 [[noreturn]] void
 Refuse(const TParts &... parts)
 {
   std::ostringstream text;
   (text << ... << parts);
-  throw ExceptionObject(__FILE__, __LINE__, text.str(), "CTVolumeReader");
+  std::string message = text.str();
+  std::replace_if(
+    message.begin(), message.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
+  throw ExceptionObject(__FILE__, __LINE__, message, "CTVolumeReader");
 }
 
 std::string
@@ -290,9 +295,15 @@ FormatMillimetres(double value)
 }
 
 /** Orders the slices of one series along the slice normal and checks that they form a
- * regular grid. Returns an empty string or the reason the stack is not one. */
+ * regular grid. Returns an empty string and the grid's geometry, or the reason the stack
+ * is not a grid. */
 std::string
-SortAndCheckSlices(std::vector<DicomSlice> & slices, double tolerance, const std::string & gantryTilt)
+SortAndCheckSlices(std::vector<DicomSlice> &        slices,
+                   double                           tolerance,
+                   const std::string &              gantryTilt,
+                   OutputImageType::PointType &     origin,
+                   OutputImageType::SpacingType &   spacing,
+                   OutputImageType::DirectionType & direction)
 {
   for (const DicomSlice & s : slices)
   {
@@ -388,15 +399,26 @@ SortAndCheckSlices(std::vector<DicomSlice> & slices, double tolerance, const std
 
   // The volume puts slice i at first + i * spacing: every slice must lie within the
   // tolerance of that place (positions are often rounded to 0.1 mm in the headers).
-  const double spacing = (slices.back().Location - slices.front().Location) / static_cast<double>(gaps.size());
+  const double sliceSpacing = (slices.back().Location - slices.front().Location) / static_cast<double>(gaps.size());
   double       worstDeviation = 0.0;
   for (size_t i = 0; i < slices.size(); ++i)
   {
     worstDeviation = std::max(
-      worstDeviation, std::abs(slices[i].Location - slices.front().Location - static_cast<double>(i) * spacing));
+      worstDeviation, std::abs(slices[i].Location - slices.front().Location - static_cast<double>(i) * sliceSpacing));
   }
-  if (worstDeviation <= tolerance * spacing)
+  if (worstDeviation <= tolerance * sliceSpacing)
   {
+    // DICOM PixelSpacing is (between rows, between columns), that is (y, x).
+    spacing[0] = first.PixelSpacing.size() == 2 ? first.PixelSpacing[1] : 1.0;
+    spacing[1] = first.PixelSpacing.size() == 2 ? first.PixelSpacing[0] : 1.0;
+    spacing[2] = sliceSpacing;
+    for (unsigned k = 0; k < 3; ++k)
+    {
+      origin[k] = slices.front().Position[k];
+      direction[k][0] = row[k];
+      direction[k][1] = column[k];
+      direction[k][2] = normal[k];
+    }
     return {};
   }
   std::vector<double> sorted = gaps;
@@ -444,6 +466,36 @@ IsDicomDirectoryFile(const std::string & file)
   return reader.GetFile().GetHeader().GetMediaStorage() == gdcm::MediaStorage::MediaStorageDirectoryStorage;
 }
 
+/** Why a file cannot hold all its pixels, or "": the file must reach past the start of
+ * its Pixel Data value by the size of the image. GDCM fills the missing part of a
+ * truncated native (uncompressed) file silently, so this is checked from the header.
+ * Compressed data has no known size and fails in its decoder instead. */
+std::string
+TruncationProblem(const std::string & file, uintmax_t pixelBytes)
+{
+  gdcm::Reader reader;
+  reader.SetFileName(file.c_str());
+  const gdcm::Tag pixelData(0x7fe0, 0x0010);
+  if (!reader.ReadUpToTag(pixelData, { pixelData }))
+  {
+    return "cannot read the header of " + file;
+  }
+  const gdcm::TransferSyntax syntax = reader.GetFile().GetHeader().GetDataSetTransferSyntax();
+  if (syntax.IsEncapsulated() || syntax == gdcm::TransferSyntax::DeflatedExplicitVRLittleEndian)
+  {
+    return {};
+  }
+  std::error_code error;
+  const uintmax_t size = fs::file_size(file, error);
+  const uintmax_t needed = reader.GetStreamCurrentPosition() + pixelBytes;
+  if (error || size < needed)
+  {
+    return file + " is truncated: its pixel data needs " + std::to_string(needed) + " bytes, the file has " +
+           std::to_string(size);
+  }
+  return {};
+}
+
 std::string
 DescribeSeries(const CTVolumeReader::SeriesInfo & s)
 {
@@ -469,7 +521,11 @@ CTVolumeReader::ResetFacts()
   m_Pipeline.clear();
   m_PipelineOutput = nullptr;
   m_ReplaceGeometry = false;
+  m_GeometryOrigin.Fill(0.0);
+  m_GeometrySpacing.Fill(1.0);
+  m_GeometryDirection.SetIdentity();
   m_IsDicom = false;
+  m_DicomPixelBytes = 0;
 }
 
 void
@@ -621,7 +677,9 @@ CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool single
                                  kRescaleSlope,
                                  kBitsAllocated,
                                  kPixelRepresentation,
-                                 kGantryTilt })
+                                 kGantryTilt,
+                                 kFrameIncrementPointer,
+                                 kSamplesPerPixel })
   {
     scanner.AddTag(tag);
   }
@@ -761,6 +819,9 @@ CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool single
   const double bits = ParseDecimal(Trim(scanner.GetValue(first.File.c_str(), kBitsAllocated)), 16.0);
   const bool   isSigned = Trim(scanner.GetValue(first.File.c_str(), kPixelRepresentation)) == "1";
   m_PixelType = (isSigned ? "int" : "uint") + std::to_string(static_cast<int>(bits));
+  m_DicomPixelBytes = static_cast<uintmax_t>(
+    ParseDecimal(first.Rows, 0.0) * ParseDecimal(first.Columns, 0.0) * static_cast<double>(first.Frames) *
+    ParseDecimal(Trim(scanner.GetValue(first.File.c_str(), kSamplesPerPixel)), 1.0) * bits / 8.0);
   for (const DicomSlice & s : slices)
   {
     if (s.Slope != first.Slope || s.Intercept != first.Intercept)
@@ -780,6 +841,20 @@ CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool single
                                           : DescribeSeries(m_ChosenSeries) + " has only one slice (" + first.File +
                                               "): a single 2D image is not a volume");
     }
+    // Frames indexed by Frame Time (Vector) are a cine loop taken in one place, not slices.
+    std::string increment;
+    for (const char c : Trim(scanner.GetValue(first.File.c_str(), kFrameIncrementPointer)))
+    {
+      if (std::isxdigit(static_cast<unsigned char>(c)))
+      {
+        increment += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      }
+    }
+    if (increment == "00181063" || increment == "00181065")
+    {
+      throw std::runtime_error(first.File + " holds " + std::to_string(first.Frames) +
+                               " frames of a time series (Frame Increment Pointer is Frame Time), not a volume");
+    }
     m_InputKind = "DICOM multi-frame file";
     if (first.PixelSpacing.empty())
     {
@@ -797,11 +872,22 @@ CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool single
                                " files of which " + s.File + " has several frames: read each multi-frame file alone");
     }
   }
-  const std::string problem =
-    SortAndCheckSlices(slices, m_SliceSpacingTolerance, Trim(scanner.GetValue(first.File.c_str(), kGantryTilt)));
+  // GDCM ignores the position of some image kinds (secondary capture, ...): the checked
+  // header geometry is given to the volume explicitly.
+  const std::string problem = SortAndCheckSlices(slices,
+                                                 m_SliceSpacingTolerance,
+                                                 Trim(scanner.GetValue(first.File.c_str(), kGantryTilt)),
+                                                 m_GeometryOrigin,
+                                                 m_GeometrySpacing,
+                                                 m_GeometryDirection);
   if (!problem.empty())
   {
     throw std::runtime_error(DescribeSeries(m_ChosenSeries) + ": " + problem);
+  }
+  m_ReplaceGeometry = true;
+  if (first.PixelSpacing.size() != 2)
+  {
+    m_Warnings.push_back(first.File + " has no PixelSpacing: 1 mm pixels assumed");
   }
   m_InputKind = "DICOM series";
   for (const DicomSlice & s : slices)
@@ -916,14 +1002,12 @@ CTVolumeReader::BuildPipeline()
   {
     auto change = ChangeInformationImageFilter<OutputImageType>::New();
     change->SetInput(tail);
-    change->SetOutputSpacing(m_OverrideSpacing ? m_SpacingOverride : SpacingType(1.0));
+    change->SetOutputSpacing(m_OverrideSpacing ? m_SpacingOverride : m_GeometrySpacing);
     change->ChangeSpacingOn();
     if (m_ReplaceGeometry)
     {
-      change->SetOutputOrigin(PointType(0.0));
-      OutputImageType::DirectionType identity;
-      identity.SetIdentity();
-      change->SetOutputDirection(identity);
+      change->SetOutputOrigin(m_GeometryOrigin);
+      change->SetOutputDirection(m_GeometryDirection);
       change->ChangeOriginOn();
       change->ChangeDirectionOn();
     }
@@ -1003,6 +1087,22 @@ CTVolumeReader::BuildPipeline()
     if (clipped)
     {
       m_Warnings.push_back("physical region of interest clipped to the volume");
+    }
+  }
+  // Only the slices to be read are checked, so that a damaged slice outside the region
+  // of interest does not stop the rest of the stack from being read.
+  if (m_IsDicom)
+  {
+    const bool   series = m_SliceFileNames.size() > 1;
+    const size_t begin = series ? static_cast<size_t>(roi.GetIndex(2)) : 0;
+    const size_t end = series ? begin + roi.GetSize(2) : 1;
+    for (size_t i = begin; i < end; ++i)
+    {
+      const std::string problem = TruncationProblem(m_SliceFileNames[i], m_DicomPixelBytes);
+      if (!problem.empty())
+      {
+        Refuse(problem);
+      }
     }
   }
   if (m_UseRegionOfInterest || m_UsePhysicalRegionOfInterest)
@@ -1100,6 +1200,10 @@ CTVolumeReader::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "SliceFileNames: " << m_SliceFileNames.size() << std::endl;
   os << indent << "Pipeline: " << m_Pipeline.size() << " internal filters" << std::endl;
   os << indent << "ReplaceGeometry: " << m_ReplaceGeometry << std::endl;
+  os << indent << "GeometryOrigin: " << m_GeometryOrigin << std::endl;
+  os << indent << "GeometrySpacing: " << m_GeometrySpacing << std::endl;
+  os << indent << "GeometryDirection: " << m_GeometryDirection << std::endl;
   os << indent << "IsDicom: " << m_IsDicom << std::endl;
+  os << indent << "DicomPixelBytes: " << m_DicomPixelBytes << std::endl;
 }
 } // end namespace itk
