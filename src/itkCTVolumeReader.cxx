@@ -19,12 +19,12 @@
 
 #include "itkBinShrinkImageFilter.h"
 #include "itkChangeInformationImageFilter.h"
+#include "itkExtractImageFilter.h"
 #include "itkGDCMImageIO.h"
 #include "itkImageFileReader.h"
 #include "itkImageIOFactory.h"
 #include "itkImageSeriesReader.h"
 #include "itkProgressAccumulator.h"
-#include "itkRegionOfInterestImageFilter.h"
 #include "itksys/Glob.hxx"
 
 #include "gdcmDirectory.h"
@@ -1107,11 +1107,29 @@ CTVolumeReader::BuildPipeline()
   }
   if (m_UseRegionOfInterest || m_UsePhysicalRegionOfInterest)
   {
-    auto extract = RegionOfInterestImageFilter<OutputImageType, OutputImageType>::New();
+    // ExtractImageFilter passes a downstream request for a few slices on upstream
+    // (RegionOfInterestImageFilter asks for the whole box); the box is then re-indexed
+    // from 0 with its corner as origin.
+    auto extract = ExtractImageFilter<OutputImageType, OutputImageType>::New();
     extract->SetInput(tail);
-    extract->SetRegionOfInterest(roi);
-    tail = extract->GetOutput();
+    extract->SetExtractionRegion(roi);
+    extract->SetDirectionCollapseToSubmatrix();
+    PointType corner;
+    tail->TransformIndexToPhysicalPoint(roi.GetIndex(), corner);
+    auto reindex = ChangeInformationImageFilter<OutputImageType>::New();
+    reindex->SetInput(extract->GetOutput());
+    OutputImageType::OffsetType offset;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      offset[d] = -roi.GetIndex(d);
+    }
+    reindex->SetOutputOffset(offset);
+    reindex->ChangeRegionOn();
+    reindex->SetOutputOrigin(corner);
+    reindex->ChangeOriginOn();
+    tail = reindex->GetOutput();
     m_Pipeline.push_back(extract.GetPointer());
+    m_Pipeline.push_back(reindex.GetPointer());
   }
 
   if (m_ShrinkFactor > 1)

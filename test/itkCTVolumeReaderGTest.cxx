@@ -620,6 +620,22 @@ TEST(CTVolumeReader, StreamsSliceBySlice)
   EXPECT_EQ(whole->GetMinimum(), streamed->GetMinimum());
   EXPECT_EQ(whole->GetMaximum(), streamed->GetMaximum());
   EXPECT_NEAR(whole->GetMean(), streamed->GetMean(), 1e-6);
+
+  // Through a region of interest and shrinking too.
+  const ImageType::RegionType box = Box(100, 120, 5, 200, 150, 10);
+  auto                        cropped = itk::StatisticsImageFilter<ImageType>::New();
+  cropped->SetInput(Crop(Read(kPhilips), box));
+  cropped->Update();
+  auto roi = MakeReader(kPhilips);
+  roi->SetRegionOfInterest(box);
+  roi->UseRegionOfInterestOn();
+  auto streamedRoi = itk::StatisticsImageFilter<ImageType>::New();
+  streamedRoi->SetInput(roi->GetOutput());
+  streamedRoi->SetNumberOfStreamDivisions(10);
+  streamedRoi->Update();
+  EXPECT_EQ(cropped->GetMinimum(), streamedRoi->GetMinimum());
+  EXPECT_EQ(cropped->GetMaximum(), streamedRoi->GetMaximum());
+  EXPECT_NEAR(cropped->GetMean(), streamedRoi->GetMean(), 1e-6);
 }
 
 TEST(CTVolumeReader, SpacingOverrideReplacesTheDicomSpacing)
