@@ -58,10 +58,13 @@ ROI_START=$(date +%s%N)
 ROI_PEAK="$(peak_rss --roi "${ROI[@]}")"
 ROI_MS=$((($(date +%s%N) - ROI_START) / 1000000))
 ROI_STATS="$(/usr/bin/python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["stats"])' "${STACK}/info.json")"
+FULL_START=$(date +%s%N)
 FULL_PEAK="$(peak_rss)"
+FULL_MS=$((($(date +%s%N) - FULL_START) / 1000000))
 report "ROI ${ROI[*]} (4.98%) --stats" "${ROI_PEAK}"
 echo "  ${ROI_MS} ms, stats ${ROI_STATS}"
 report "whole stack --stats" "${FULL_PEAK}"
+echo "  ${FULL_MS} ms"
 if [ "${ROI_PEAK}" -lt $((STACK_BYTES / 10)) ]; then
   echo "ct_roi_memory: PASS (ROI peak below 10% of the stack)"
 else
