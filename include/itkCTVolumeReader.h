@@ -41,8 +41,9 @@ namespace itk {
  *   file name or instance number. Rescale Slope/Intercept is applied to each slice (CT
  *   gives Hounsfield units). Every transfer syntax GDCM decodes is accepted (JPEG
  *   lossless, JPEG 2000, JPEG-LS, RLE, deflate, big endian, implicit VR).
- * - a single DICOM file: read when it holds several frames (multi-frame); a single frame
- *   is a 2D image and is refused, as is a series of one slice.
+ * - a single DICOM file: read when it holds several frames that step through space
+ *   (multi-frame); a single frame is a 2D image and is refused, as are a series of one
+ *   slice and a cine loop (Frame Increment Pointer = Frame Time).
  * - a directory or a glob pattern (e.g. "scan/slice_*.tif") of 2D slices (8, 16 or 32 bit
  *   TIFF, or any 2D format ITK reads): ordered by natural sort of the file names
  *   (slice2 before slice10). TIFF resolution tags are not trusted: spacing is SpacingOverride
@@ -54,7 +55,10 @@ namespace itk {
  * mixed image sizes, pixel spacings or orientations; duplicate slice positions; missing
  * slices (a gap of about k times the usual spacing: the gap and its files are named);
  * non-uniform spacing; sheared stacks (gantry or detector tilt: slice origins that drift
- * sideways). Each is refused, never returned as a wrongly shaped volume.
+ * sideways by more than half a pixel); truncated files among the slices to be read. Each
+ * is refused, never returned as a wrongly shaped volume (irregular stacks are not
+ * resampled). The volume then takes the checked header geometry: origin of the first
+ * slice, PixelSpacing, mean slice spacing, direction (row, column, normal).
  *
  * Parameters (all optional):
  * - SeriesIdentifier: SeriesInstanceUID or series number; default "" (most slices).
@@ -63,10 +67,11 @@ namespace itk {
  * - RegionOfInterest, UseRegionOfInterest: a box in voxel indices of the full volume,
  *   which must lie inside it; default off.
  * - PhysicalRegionOfInterestStart/End, UsePhysicalRegionOfInterest: two opposite corners
- *   in physical coordinates (mm); the box of voxels whose centres lie between them,
- *   clipped to the volume (with a warning) and refused when empty; default off.
+ *   in physical coordinates (mm); the smallest voxel box that holds the voxels whose
+ *   centres lie between them (exactly those voxels for an axis-aligned volume), clipped
+ *   to the volume (with a warning) and refused when empty; default off.
  * - ShrinkFactor: integer downsampling by averaging (BinShrinkImageFilter) after the
- *   region of interest, >= 1; default 1.
+ *   region of interest (the spacing grows by the factor), >= 1; default 1.
  * - SliceSpacingTolerance: how far a DICOM slice may lie from its place on the regular
  *   grid (first position + i x mean spacing), as a fraction of the slice spacing, before
  *   the stack is called irregular (headers often round positions to 0.1 mm); (0, 0.5],
@@ -74,8 +79,14 @@ namespace itk {
  *
  * The output streams: a downstream filter that requests a sub-region (for example a few
  * slices, or StatisticsImageFilter with several stream divisions) makes the reader read
- * only the slices it needs (ImageSeriesReader), so a stack larger than memory can be
- * cropped or summarised.
+ * only the slices it needs (ImageSeriesReader, ExtractImageFilter), so a stack larger
+ * than memory can be cropped or summarised. A region of interest is indexed from 0 and
+ * its origin is its first voxel. Progress is reported and AbortGenerateData honoured
+ * slice by slice.
+ *
+ * References: DICOM PS3.3 C.7.6.2 (Image Plane Module: ImagePositionPatient,
+ * ImageOrientationPatient, PixelSpacing) and C.11.1 (Modality LUT: Rescale
+ * Slope/Intercept).
  *
  * What was read is reported after UpdateOutputInformation(): InputKind, Modality,
  * PixelType (stored component type), RescaleSlope/Intercept, ChosenSeries,

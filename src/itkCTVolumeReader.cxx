@@ -1217,6 +1217,7 @@ CTVolumeReader::PrintSelf(std::ostream & os, Indent indent) const
   }
   os << indent << "SliceFileNames: " << m_SliceFileNames.size() << std::endl;
   os << indent << "Pipeline: " << m_Pipeline.size() << " internal filters" << std::endl;
+  os << indent << "PipelineOutput: " << m_PipelineOutput.GetPointer() << std::endl;
   os << indent << "ReplaceGeometry: " << m_ReplaceGeometry << std::endl;
   os << indent << "GeometryOrigin: " << m_GeometryOrigin << std::endl;
   os << indent << "GeometrySpacing: " << m_GeometrySpacing << std::endl;

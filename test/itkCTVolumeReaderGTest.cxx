@@ -19,6 +19,7 @@
 #include "vuTestHelpers.h"
 
 #include "itkBinShrinkImageFilter.h"
+#include "itkCommand.h"
 #include "itkImageFileWriter.h"
 #include "itkImageRegionConstIterator.h"
 #include "itkImageRegionIteratorWithIndex.h"
@@ -636,6 +637,20 @@ TEST(CTVolumeReader, StreamsSliceBySlice)
   EXPECT_EQ(cropped->GetMinimum(), streamedRoi->GetMinimum());
   EXPECT_EQ(cropped->GetMaximum(), streamedRoi->GetMaximum());
   EXPECT_NEAR(cropped->GetMean(), streamedRoi->GetMean(), 1e-6);
+}
+
+TEST(CTVolumeReader, ReportsProgressAndHonoursAbort)
+{
+  auto   reader = MakeReader(kPhilips);
+  size_t reports = 0;
+  auto   abortAtFirstReport = itk::FunctionCommand::New();
+  abortAtFirstReport->SetCallback([&](const itk::EventObject &) {
+    ++reports;
+    reader->AbortGenerateDataOn();
+  });
+  reader->AddObserver(itk::ProgressEvent(), abortAtFirstReport);
+  EXPECT_THROW(reader->Update(), itk::ProcessAborted);
+  EXPECT_GE(reports, 1u);
 }
 
 TEST(CTVolumeReader, SpacingOverrideReplacesTheDicomSpacing)
