@@ -214,6 +214,9 @@ private:
   ExamineVolumeFile(const std::string & file);
   void
   BuildPipeline();
+  /** After a failed read: the first file of the region of interest that cannot be read. */
+  std::string
+  FindUnreadableFile() const;
 
   std::string m_FileName;
   std::string m_SeriesIdentifier;
@@ -252,6 +255,9 @@ private:
   bool                           m_IsDicom{ false };
   /** Size of the pixel data of one DICOM file, to detect truncated files. */
   uintmax_t m_DicomPixelBytes{ 0 };
+  /** Files of the region of interest: [first, end) of SliceFileNames. */
+  size_t m_FirstSliceToRead{ 0 };
+  size_t m_EndSliceToRead{ 0 };
 };
 } // end namespace itk
 

@@ -24,6 +24,7 @@
 #include "itkImageFileReader.h"
 #include "itkImageIOFactory.h"
 #include "itkImageSeriesReader.h"
+#include "itkMetaImageIO.h"
 #include "itkProgressAccumulator.h"
 #include "itksys/Glob.hxx"
 
@@ -268,6 +269,33 @@ ReadImageHeader(const std::string & file)
     throw std::runtime_error("cannot read " + file + ": " + e.GetDescription());
   }
   return io;
+}
+
+/** Why a MetaImage cannot hold its voxels, or "": MetaIO reads a short uncompressed data
+ * file without failing (it only prints a notice) and leaves the rest of the buffer as it
+ * was, so the size of the data file is checked against the header. */
+std::string
+MetaImageTruncation(const std::string & file, ImageIOBase * io)
+{
+  auto * meta = dynamic_cast<MetaImageIO *>(io);
+  if (meta == nullptr || meta->GetMetaImagePointer()->CompressedData())
+  {
+    return {};
+  }
+  const std::string dataName = meta->GetMetaImagePointer()->ElementDataFileName();
+  if (dataName == "LIST" || dataName.find('%') != std::string::npos || dataName.find(' ') != std::string::npos)
+  {
+    return {};
+  }
+  const fs::path  data = dataName == "LOCAL" ? fs::path(file) : fs::path(file).parent_path() / dataName;
+  std::error_code error;
+  const uintmax_t size = fs::file_size(data, error);
+  if (error || size < static_cast<uintmax_t>(io->GetImageSizeInBytes()))
+  {
+    return "cannot read " + file + ": its data file " + data.string() + " holds " + std::to_string(error ? 0 : size) +
+           " bytes, the image needs " + std::to_string(io->GetImageSizeInBytes());
+  }
+  return {};
 }
 
 /** Header facts of one DICOM image file, as found by the GDCM scanner. */
@@ -526,6 +554,8 @@ CTVolumeReader::ResetFacts()
   m_GeometryDirection.SetIdentity();
   m_IsDicom = false;
   m_DicomPixelBytes = 0;
+  m_FirstSliceToRead = 0;
+  m_EndSliceToRead = 0;
 }
 
 void
@@ -953,6 +983,11 @@ CTVolumeReader::ExamineVolumeFile(const std::string & file)
                                "): only 3D volumes are read");
     }
   }
+  const std::string truncation = MetaImageTruncation(file, io);
+  if (!truncation.empty())
+  {
+    throw std::runtime_error(truncation);
+  }
   m_PixelType = ComponentTypeName(io->GetComponentType(), io->GetComponentSize());
   m_InputKind = "image file";
   if (std::string(io->GetNameOfClass()) == "TIFFImageIO")
@@ -1089,14 +1124,14 @@ CTVolumeReader::BuildPipeline()
       m_Warnings.push_back("physical region of interest clipped to the volume");
     }
   }
+  const bool series = m_SliceFileNames.size() > 1;
+  m_FirstSliceToRead = series ? static_cast<size_t>(roi.GetIndex(2)) : 0;
+  m_EndSliceToRead = series ? m_FirstSliceToRead + roi.GetSize(2) : 1;
   // Only the slices to be read are checked, so that a damaged slice outside the region
   // of interest does not stop the rest of the stack from being read.
   if (m_IsDicom)
   {
-    const bool   series = m_SliceFileNames.size() > 1;
-    const size_t begin = series ? static_cast<size_t>(roi.GetIndex(2)) : 0;
-    const size_t end = series ? begin + roi.GetSize(2) : 1;
-    for (size_t i = begin; i < end; ++i)
+    for (size_t i = m_FirstSliceToRead; i < m_EndSliceToRead; ++i)
     {
       const std::string problem = TruncationProblem(m_SliceFileNames[i], m_DicomPixelBytes);
       if (!problem.empty())
@@ -1177,9 +1212,33 @@ CTVolumeReader::GenerateData()
   }
   catch (const ExceptionObject & e)
   {
-    Refuse("cannot read ", m_FileName, ": ", e.GetDescription());
+    Refuse("cannot read ", this->FindUnreadableFile(), ": ", e.GetDescription());
   }
   this->GraftOutput(tail);
+}
+
+std::string
+CTVolumeReader::FindUnreadableFile() const
+{
+  // The series reader does not say which slice failed: read them one by one to find it.
+  for (size_t i = m_FirstSliceToRead; i < m_EndSliceToRead; ++i)
+  {
+    auto reader = ImageFileReader<OutputImageType>::New();
+    reader->SetFileName(m_SliceFileNames[i]);
+    if (m_IsDicom)
+    {
+      reader->SetImageIO(GDCMImageIO::New());
+    }
+    try
+    {
+      reader->Update();
+    }
+    catch (const ExceptionObject &)
+    {
+      return m_SliceFileNames[i];
+    }
+  }
+  return m_FileName;
 }
 
 void
@@ -1224,5 +1283,6 @@ CTVolumeReader::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "GeometryDirection: " << m_GeometryDirection << std::endl;
   os << indent << "IsDicom: " << m_IsDicom << std::endl;
   os << indent << "DicomPixelBytes: " << m_DicomPixelBytes << std::endl;
+  os << indent << "SlicesToRead: [" << m_FirstSliceToRead << ", " << m_EndSliceToRead << ")" << std::endl;
 }
 } // end namespace itk

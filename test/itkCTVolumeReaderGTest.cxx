@@ -775,6 +775,15 @@ TEST(CTVolumeReader, TiffStackOfMixedSizesIsRefused)
   EXPECT_TRUE(Contains(message, "slice3.tif is 21x16")) << message;
 }
 
+TEST(CTVolumeReader, TruncatedTiffSliceIsNamed)
+{
+  const std::string directory = TemporaryDirectory();
+  WriteTiffStack<unsigned short>(directory, 5, 64, 64);
+  fs::resize_file(directory + "/slice4.tif", 2000);
+  const std::string message = Refusal(directory);
+  EXPECT_EQ(message.rfind("cannot read " + directory + "/slice4.tif: ", 0), 0u) << message;
+}
+
 TEST(CTVolumeReader, MultiPageTiffAndSingle2DFile)
 {
   const std::string directory = TemporaryDirectory();
@@ -865,6 +874,10 @@ TEST(CTVolumeReader, BadInputIsRefusedWithAOneLineMessage)
   std::ofstream(directory + "/broken.nrrd") << "NRRD0004\ngarbage";
   cases.push_back({ directory + "/broken.nrrd", "cannot read " + directory + "/broken.nrrd" });
   cases.push_back({ kDicom + "/pydicom/dicomdirtests/DICOMDIR", "without an image" });
+  std::ofstream(directory + "/short.mhd")
+    << "ObjectType = Image\nNDims = 3\nDimSize = 10 10 10\nElementType = MET_SHORT\nElementDataFile = short.raw\n";
+  std::ofstream(directory + "/short.raw") << std::string(500, '\0');
+  cases.push_back({ directory + "/short.mhd", "holds 500 bytes, the image needs 2000" });
   for (const auto & [path, expected] : cases)
   {
     SCOPED_TRACE(path);
