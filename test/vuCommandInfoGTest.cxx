@@ -130,6 +130,15 @@ TEST(vuCommandInfo, RegionOfInterestAndShrinking)
   EXPECT_EQ(json["full_size"], nlohmann::json({ 512, 512, 28 }));
   EXPECT_NEAR(json["spacing"][2].get<double>(), 10.0, 1e-9);
   EXPECT_FALSE(json.contains("stats"));
+
+  // Physical corners: x and y beyond the volume (clipped, with a warning), z 700..712 mm
+  // holds the slices at 701.21, 706.21 and 711.21 mm.
+  const ToolRun physical = Info("'" + kPhilips + "' --roi-mm -1000 -1000 700 1000 1000 712", directory);
+  ASSERT_EQ(physical.Status, 0) << physical.Err;
+  const nlohmann::json clipped = nlohmann::json::parse(physical.Out);
+  EXPECT_EQ(clipped["size"], nlohmann::json({ 512, 512, 3 }));
+  EXPECT_NEAR(clipped["origin"][2].get<double>(), 701.21, 1e-9);
+  EXPECT_EQ(clipped["warnings"].size(), 1u);
 }
 
 TEST(vuCommandInfo, TiffStackWithSpacing)
