@@ -204,6 +204,10 @@ protected:
 private:
   void
   ResetFacts();
+  /** Reads a list of files (a directory's, or a glob's matches): a TIFF stack, a DICOM
+   * series found among dicomSearch, or a stack of other 2D images. */
+  void
+  ExamineFiles(const std::vector<std::string> & listed, const std::vector<std::string> & dicomSearch);
   /** Returns false when none of the files is DICOM; throws when the DICOM input cannot
    * be read as a volume. */
   bool

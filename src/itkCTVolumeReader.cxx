@@ -216,6 +216,39 @@ HasTiffExtension(const fs::path & path)
   return extension == ".tif" || extension == ".tiff";
 }
 
+/** Formats ITK reads that are never DICOM (a DICOM file may have any name or none). */
+bool
+HasNonDicomImageExtension(const fs::path & path)
+{
+  std::string name = path.filename().string();
+  std::transform(
+    name.begin(), name.end(), name.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  for (const char * extension : { ".tif",
+                                  ".tiff",
+                                  ".nrrd",
+                                  ".nhdr",
+                                  ".mha",
+                                  ".mhd",
+                                  ".raw",
+                                  ".nii",
+                                  ".nii.gz",
+                                  ".hdr",
+                                  ".img",
+                                  ".png",
+                                  ".jpg",
+                                  ".jpeg",
+                                  ".bmp",
+                                  ".vtk" })
+  {
+    const std::string e(extension);
+    if (name.size() > e.size() && name.compare(name.size() - e.size(), e.size(), e) == 0)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
 std::string
 ComponentTypeName(IOComponentEnum type, size_t bytes)
 {
@@ -602,10 +635,7 @@ CTVolumeReader::GenerateOutputInformation()
       {
         throw std::runtime_error("no file matches " + m_FileName);
       }
-      if (!this->ExamineDicom(files, false))
-      {
-        this->ExamineSliceStack(files);
-      }
+      this->ExamineFiles(files, files);
     }
     else if (!exists)
     {
@@ -613,58 +643,23 @@ CTVolumeReader::GenerateOutputInformation()
     }
     else if (fs::is_directory(m_FileName, error))
     {
-      std::vector<std::string> tiffs, others;
+      std::vector<std::string> listed;
       for (const auto & entry : fs::directory_iterator(m_FileName))
       {
         if (entry.is_regular_file())
         {
-          (HasTiffExtension(entry.path()) ? tiffs : others).push_back(entry.path().string());
+          listed.push_back(entry.path().string());
         }
       }
-      // TIFF stacks hold thousands of large slices: recognise them by name rather than
-      // let the DICOM scanner open each one.
-      if (tiffs.size() == 1)
+      gdcm::Directory directory;
+      directory.Load(m_FileName, true);
+      if (directory.GetFilenames().empty())
       {
-        this->ExamineVolumeFile(tiffs.front());
+        throw std::runtime_error("directory is empty: " + m_FileName);
       }
-      else if (!tiffs.empty())
-      {
-        this->ExamineSliceStack(tiffs);
-      }
-      else
-      {
-        gdcm::Directory directory;
-        directory.Load(m_FileName, true);
-        if (directory.GetFilenames().empty())
-        {
-          throw std::runtime_error("directory is empty: " + m_FileName);
-        }
-        if (!this->ExamineDicom(directory.GetFilenames(), false))
-        {
-          std::vector<std::string> images;
-          for (const std::string & f : others)
-          {
-            if (ImageIOFactory::CreateImageIO(f.c_str(), ImageIOFactory::IOFileModeEnum::ReadMode).IsNotNull())
-            {
-              images.push_back(f);
-            }
-          }
-          if (images.empty())
-          {
-            throw std::runtime_error("no DICOM, TIFF or other image files in " + m_FileName);
-          }
-          if (images.size() == 1)
-          {
-            this->ExamineVolumeFile(images.front());
-          }
-          else
-          {
-            this->ExamineSliceStack(images);
-          }
-        }
-      }
+      this->ExamineFiles(listed, directory.GetFilenames());
     }
-    else if (!this->ExamineDicom({ m_FileName }, true))
+    else if (HasNonDicomImageExtension(m_FileName) || !this->ExamineDicom({ m_FileName }, true))
     {
       this->ExamineVolumeFile(m_FileName);
     }
@@ -674,6 +669,62 @@ CTVolumeReader::GenerateOutputInformation()
     Refuse(e.what());
   }
   this->BuildPipeline();
+}
+
+void
+CTVolumeReader::ExamineFiles(const std::vector<std::string> & listed, const std::vector<std::string> & dicomSearch)
+{
+  // TIFF stacks hold thousands of large slices, and GDCM's parser can abort on foreign
+  // binary data: files named as another image format never go to the DICOM scanner.
+  std::vector<std::string> tiffs, images, dicomCandidates;
+  for (const std::string & f : listed)
+  {
+    if (HasTiffExtension(f))
+    {
+      tiffs.push_back(f);
+    }
+    else if (HasNonDicomImageExtension(f))
+    {
+      images.push_back(f);
+    }
+  }
+  for (const std::string & f : dicomSearch)
+  {
+    if (!HasNonDicomImageExtension(f))
+    {
+      dicomCandidates.push_back(f);
+    }
+  }
+  if (!tiffs.empty())
+  {
+    images = tiffs;
+  }
+  else if (!dicomCandidates.empty() && this->ExamineDicom(dicomCandidates, false))
+  {
+    return;
+  }
+  else if (images.empty())
+  {
+    for (const std::string & f : listed)
+    {
+      if (ImageIOFactory::CreateImageIO(f.c_str(), ImageIOFactory::IOFileModeEnum::ReadMode).IsNotNull())
+      {
+        images.push_back(f);
+      }
+    }
+  }
+  if (images.empty())
+  {
+    throw std::runtime_error("no DICOM, TIFF or other image files in " + m_FileName);
+  }
+  if (images.size() == 1)
+  {
+    this->ExamineVolumeFile(images.front());
+  }
+  else
+  {
+    this->ExamineSliceStack(images);
+  }
 }
 
 bool
