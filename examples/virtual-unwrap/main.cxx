@@ -87,6 +87,7 @@ main(int argc, char * argv[])
   vu::RegisterDistortionCommand(app);
   vu::RegisterFlattenCommand(app);
   vu::RegisterPhantomCommand(app);
+  vu::RegisterInfoCommand(app);
 
   try
   {

@@ -40,6 +40,8 @@ void
 RegisterFlattenCommand(CLI::App & app);
 void
 RegisterPhantomCommand(CLI::App & app);
+void
+RegisterInfoCommand(CLI::App & app);
 
 /** Writes text to path atomically: to a temporary name beside it, then renamed, so a
  * failure never leaves a half-written file. */

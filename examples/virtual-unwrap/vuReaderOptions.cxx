@@ -1,0 +1,113 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "vuReaderOptions.h"
+
+#include "vuCommands.h"
+
+#include <cmath>
+
+namespace vu {
+void
+AddReaderOptions(CLI::App & command, ReaderOptions & options)
+{
+  command.add_option("--series",
+                     options.Series,
+                     "DICOM series to read: SeriesInstanceUID or series number (default: the series with the most "
+                     "slices)");
+  command
+    .add_option("--spacing",
+                options.Spacing,
+                "voxel size X Y Z in mm, replacing the input's (required for "
+                "correct geometry of TIFF stacks, which default to 1 1 1)")
+    ->expected(3);
+  command
+    .add_option("--roi",
+                options.RegionOfInterest,
+                "read only this box of voxels: X Y Z (first index) SX SY SZ (size), in the full volume")
+    ->expected(6);
+  command
+    .add_option("--roi-mm",
+                options.PhysicalRegionOfInterest,
+                "read only this box in physical coordinates: X0 Y0 Z0 X1 Y1 Z1 (two opposite corners, mm)")
+    ->expected(6);
+  command.add_option("--shrink", options.Shrink, "integer downsampling factor (averaging), applied after the ROI")
+    ->check(CLI::Range(1u, 64u))
+    ->capture_default_str();
+  command
+    .add_option("--slice-tolerance",
+                options.SliceSpacingTolerance,
+                "how far a DICOM slice may lie from its place on the regular grid, as a fraction of the slice "
+                "spacing, before the series is refused as irregular")
+    ->check(CLI::Range(1e-6, 0.5))
+    ->capture_default_str();
+}
+
+void
+ConfigureReader(const ReaderOptions & options, const std::string & path, itk::CTVolumeReader & reader)
+{
+  reader.SetFileName(path);
+  reader.SetSeriesIdentifier(options.Series);
+  if (!options.Spacing.empty())
+  {
+    itk::CTVolumeReader::SpacingType spacing;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      if (!(options.Spacing[d] > 0.0) || !std::isfinite(options.Spacing[d]))
+      {
+        throw UsageError("--spacing: each voxel size must be a positive number of mm");
+      }
+      spacing[d] = options.Spacing[d];
+    }
+    reader.SetSpacingOverride(spacing);
+    reader.OverrideSpacingOn();
+  }
+  if (!options.RegionOfInterest.empty() && !options.PhysicalRegionOfInterest.empty())
+  {
+    throw UsageError("give either --roi or --roi-mm, not both");
+  }
+  if (!options.RegionOfInterest.empty())
+  {
+    itk::CTVolumeReader::RegionType region;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      if (options.RegionOfInterest[d] < 0 || options.RegionOfInterest[d + 3] <= 0)
+      {
+        throw UsageError("--roi: the first index must be >= 0 and the size > 0");
+      }
+      region.SetIndex(d, options.RegionOfInterest[d]);
+      region.SetSize(d, static_cast<itk::SizeValueType>(options.RegionOfInterest[d + 3]));
+    }
+    reader.SetRegionOfInterest(region);
+    reader.UseRegionOfInterestOn();
+  }
+  if (!options.PhysicalRegionOfInterest.empty())
+  {
+    itk::CTVolumeReader::PointType start, end;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      start[d] = options.PhysicalRegionOfInterest[d];
+      end[d] = options.PhysicalRegionOfInterest[d + 3];
+    }
+    reader.SetPhysicalRegionOfInterestStart(start);
+    reader.SetPhysicalRegionOfInterestEnd(end);
+    reader.UsePhysicalRegionOfInterestOn();
+  }
+  reader.SetShrinkFactor(options.Shrink);
+  reader.SetSliceSpacingTolerance(options.SliceSpacingTolerance);
+}
+} // namespace vu

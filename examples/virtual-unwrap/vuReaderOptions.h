@@ -1,0 +1,52 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef vuReaderOptions_h
+#define vuReaderOptions_h
+
+#include "itkCTVolumeReader.h"
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+#include <vector>
+
+namespace vu {
+/** The CT reader's command-line options, shared by every subcommand that reads a volume
+ * (info, unwrap, ...). */
+struct ReaderOptions
+{
+  std::string         Series;
+  std::vector<double> Spacing;
+  std::vector<long>   RegionOfInterest;
+  std::vector<double> PhysicalRegionOfInterest;
+  unsigned int        Shrink{ 1 };
+  double              SliceSpacingTolerance{ 0.05 };
+};
+
+/** Adds --series, --spacing, --roi, --roi-mm, --shrink and --slice-tolerance to a
+ * subcommand; the values land in options, which must outlive the parse. */
+void
+AddReaderOptions(CLI::App & command, ReaderOptions & options);
+
+/** Sets the input path and the options on a reader; throws vu::UsageError for values
+ * that cannot be right whatever the input (e.g. a negative spacing). */
+void
+ConfigureReader(const ReaderOptions & options, const std::string & path, itk::CTVolumeReader & reader);
+} // namespace vu
+
+#endif

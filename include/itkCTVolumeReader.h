@@ -1,0 +1,268 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkCTVolumeReader_h
+#define itkCTVolumeReader_h
+
+#include "VirtualUnwrappingExport.h"
+#include "itkImage.h"
+#include "itkImageSource.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace itk {
+/** \class CTVolumeReader
+ * \brief Reads a CT scan (DICOM series, stack of 2D slices, or a single volume file) into
+ * an Image<float, 3> with its physical geometry and calibrated values, or refuses it with
+ * a one-line message that names the file and the problem.
+ *
+ * FileName may be:
+ * - a directory holding DICOM files (searched recursively). The files are grouped into
+ *   series by SeriesInstanceUID (GDCM scanner); SeriesIdentifier chooses one by UID or
+ *   by series number, otherwise the series with the most slices is read (a tie is refused)
+ *   and a warning names the choice and the alternatives. Slices are ordered by their
+ *   position along the slice normal (ImagePositionPatient . (row x column)), never by
+ *   file name or instance number. Rescale Slope/Intercept is applied to each slice (CT
+ *   gives Hounsfield units). Every transfer syntax GDCM decodes is accepted (JPEG
+ *   lossless, JPEG 2000, JPEG-LS, RLE, deflate, big endian, implicit VR).
+ * - a single DICOM file: read when it holds several frames that step through space
+ *   (multi-frame); a single frame is a 2D image and is refused, as are a series of one
+ *   slice and a cine loop (Frame Increment Pointer = Frame Time).
+ * - a directory or a glob pattern (e.g. "scan/slice_*.tif") of 2D slices (8, 16 or 32 bit
+ *   TIFF, or any 2D format ITK reads): ordered by natural sort of the file names
+ *   (slice2 before slice10). TIFF resolution tags are not trusted: spacing is SpacingOverride
+ *   or 1 x 1 x 1 with a warning, origin 0, identity direction.
+ * - a single volume file: NRRD, MetaImage (.mha/.mhd), NIfTI, multi-page TIFF (geometry
+ *   from the file, except TIFF which is treated like a stack).
+ *
+ * Geometry checks of a DICOM series, done on the headers before any pixel is read:
+ * mixed image sizes, pixel spacings or orientations; duplicate slice positions; missing
+ * slices (a gap of about k times the usual spacing: the gap and its files are named);
+ * non-uniform spacing; sheared stacks (gantry or detector tilt: slice origins that drift
+ * sideways by more than half a pixel); truncated files among the slices to be read. Each
+ * is refused, never returned as a wrongly shaped volume (irregular stacks are not
+ * resampled). The volume then takes the checked header geometry: origin of the first
+ * slice, PixelSpacing, mean slice spacing, direction (row, column, normal).
+ *
+ * Parameters (all optional):
+ * - SeriesIdentifier: SeriesInstanceUID or series number; default "" (most slices).
+ * - SpacingOverride, OverrideSpacing: voxel size in mm (each > 0) that replaces the
+ *   spacing of any input; default off.
+ * - RegionOfInterest, UseRegionOfInterest: a box in voxel indices of the full volume,
+ *   which must lie inside it; default off.
+ * - PhysicalRegionOfInterestStart/End, UsePhysicalRegionOfInterest: two opposite corners
+ *   in physical coordinates (mm); the smallest voxel box that holds the voxels whose
+ *   centres lie between them (exactly those voxels for an axis-aligned volume), clipped
+ *   to the volume (with a warning) and refused when empty; default off.
+ * - ShrinkFactor: integer downsampling by averaging (BinShrinkImageFilter) after the
+ *   region of interest (the spacing grows by the factor), >= 1; default 1.
+ * - SliceSpacingTolerance: how far a DICOM slice may lie from its place on the regular
+ *   grid (first position + i x mean spacing), as a fraction of the slice spacing, before
+ *   the stack is called irregular (headers often round positions to 0.1 mm); (0, 0.5],
+ *   default 0.05. Slice origins may drift sideways by at most half a pixel.
+ *
+ * The output streams: a downstream filter that requests a sub-region (for example a few
+ * slices, or StatisticsImageFilter with several stream divisions) makes the reader read
+ * only the slices it needs (ImageSeriesReader, ExtractImageFilter), so a stack larger
+ * than memory can be cropped or summarised. A region of interest is indexed from 0 and
+ * its origin is its first voxel. Progress is reported and AbortGenerateData honoured
+ * slice by slice.
+ *
+ * References: DICOM PS3.3 C.7.6.2 (Image Plane Module: ImagePositionPatient,
+ * ImageOrientationPatient, PixelSpacing) and C.11.1 (Modality LUT: Rescale
+ * Slope/Intercept).
+ *
+ * What was read is reported after UpdateOutputInformation(): InputKind, Modality,
+ * PixelType (stored component type), RescaleSlope/Intercept, ChosenSeries,
+ * AlternativeSeries, Warnings, FullSize (before the region of interest and shrinking) and
+ * SliceFileNames (in slice order).
+ *
+ * \ingroup VirtualUnwrapping
+ */
+class VirtualUnwrapping_EXPORT CTVolumeReader : public ImageSource<Image<float, 3>>
+{
+public:
+  ITK_DISALLOW_COPY_AND_MOVE(CTVolumeReader);
+
+  using Self = CTVolumeReader;
+  using OutputImageType = Image<float, 3>;
+  using Superclass = ImageSource<OutputImageType>;
+  using Pointer = SmartPointer<Self>;
+  using ConstPointer = SmartPointer<const Self>;
+
+  using RegionType = OutputImageType::RegionType;
+  using SizeType = OutputImageType::SizeType;
+  using SpacingType = OutputImageType::SpacingType;
+  using PointType = OutputImageType::PointType;
+
+  itkNewMacro(Self);
+  itkTypeMacro(CTVolumeReader, ImageSource);
+
+  /** One DICOM series found in the input. */
+  struct SeriesInfo
+  {
+    std::string   UID;
+    std::string   Number;
+    std::string   Description;
+    std::string   Modality;
+    SizeValueType NumberOfSlices{ 0 };
+  };
+
+  itkSetStringMacro(FileName);
+  itkGetStringMacro(FileName);
+  itkSetStringMacro(SeriesIdentifier);
+  itkGetStringMacro(SeriesIdentifier);
+
+  itkSetMacro(SpacingOverride, SpacingType);
+  itkGetConstMacro(SpacingOverride, SpacingType);
+  itkSetMacro(OverrideSpacing, bool);
+  itkGetConstMacro(OverrideSpacing, bool);
+  itkBooleanMacro(OverrideSpacing);
+
+  itkSetMacro(RegionOfInterest, RegionType);
+  itkGetConstMacro(RegionOfInterest, RegionType);
+  itkSetMacro(UseRegionOfInterest, bool);
+  itkGetConstMacro(UseRegionOfInterest, bool);
+  itkBooleanMacro(UseRegionOfInterest);
+
+  itkSetMacro(PhysicalRegionOfInterestStart, PointType);
+  itkGetConstMacro(PhysicalRegionOfInterestStart, PointType);
+  itkSetMacro(PhysicalRegionOfInterestEnd, PointType);
+  itkGetConstMacro(PhysicalRegionOfInterestEnd, PointType);
+  itkSetMacro(UsePhysicalRegionOfInterest, bool);
+  itkGetConstMacro(UsePhysicalRegionOfInterest, bool);
+  itkBooleanMacro(UsePhysicalRegionOfInterest);
+
+  itkSetClampMacro(ShrinkFactor, unsigned int, 1, NumericTraits<unsigned int>::max());
+  itkGetConstMacro(ShrinkFactor, unsigned int);
+
+  itkSetClampMacro(SliceSpacingTolerance, double, 1e-6, 0.5);
+  itkGetConstMacro(SliceSpacingTolerance, double);
+
+  /** "DICOM series", "DICOM multi-frame file", "image stack" or "image file". */
+  itkGetStringMacro(InputKind);
+  /** DICOM Modality (CT, MR, ...); empty for other formats. */
+  itkGetStringMacro(Modality);
+  /** Stored pixel component type before calibration: uint8, int16, uint16, float... */
+  itkGetStringMacro(PixelType);
+  itkGetConstMacro(RescaleSlope, double);
+  itkGetConstMacro(RescaleIntercept, double);
+  itkGetConstMacro(FullSize, SizeType);
+
+  const SeriesInfo &
+  GetChosenSeries() const
+  {
+    return m_ChosenSeries;
+  }
+  const std::vector<SeriesInfo> &
+  GetAlternativeSeries() const
+  {
+    return m_AlternativeSeries;
+  }
+  const std::vector<std::string> &
+  GetWarnings() const
+  {
+    return m_Warnings;
+  }
+  const std::vector<std::string> &
+  GetSliceFileNames() const
+  {
+    return m_SliceFileNames;
+  }
+
+protected:
+  CTVolumeReader() = default;
+  ~CTVolumeReader() override = default;
+  void
+  PrintSelf(std::ostream & os, Indent indent) const override;
+
+  /** Examines the input (headers only), checks its geometry and builds the internal
+   * reading pipeline; throws ExceptionObject when the input cannot be read as a volume. */
+  void
+  GenerateOutputInformation() override;
+
+  /** Reads the requested region through the internal pipeline. */
+  void
+  GenerateData() override;
+
+private:
+  void
+  ResetFacts();
+  /** Reads a list of files (a directory's, or a glob's matches): a TIFF stack, a DICOM
+   * series found among dicomSearch, or a stack of other 2D images. */
+  void
+  ExamineFiles(const std::vector<std::string> & listed, const std::vector<std::string> & dicomSearch);
+  /** Returns false when none of the files is DICOM; throws when the DICOM input cannot
+   * be read as a volume. */
+  bool
+  ExamineDicom(const std::vector<std::string> & files, bool singleFile);
+  void
+  ExamineSliceStack(std::vector<std::string> files);
+  void
+  ExamineVolumeFile(const std::string & file);
+  void
+  BuildPipeline();
+  /** After a failed read: the first file of the region of interest that cannot be read. */
+  std::string
+  FindUnreadableFile() const;
+
+  std::string m_FileName;
+  std::string m_SeriesIdentifier;
+  SpacingType m_SpacingOverride{ 1.0 };
+  bool        m_OverrideSpacing{ false };
+  RegionType  m_RegionOfInterest;
+  bool        m_UseRegionOfInterest{ false };
+  PointType   m_PhysicalRegionOfInterestStart{ 0.0 };
+  PointType   m_PhysicalRegionOfInterestEnd{ 0.0 };
+  bool        m_UsePhysicalRegionOfInterest{ false };
+  unsigned    m_ShrinkFactor{ 1 };
+  double      m_SliceSpacingTolerance{ 0.05 };
+
+  std::string              m_InputKind;
+  std::string              m_Modality;
+  std::string              m_PixelType;
+  double                   m_RescaleSlope{ 1.0 };
+  double                   m_RescaleIntercept{ 0.0 };
+  SizeType                 m_FullSize{ { 0, 0, 0 } };
+  SeriesInfo               m_ChosenSeries;
+  std::vector<SeriesInfo>  m_AlternativeSeries;
+  std::vector<std::string> m_Warnings;
+  std::vector<std::string> m_SliceFileNames;
+
+  /** The internal pipeline (reader, geometry, region of interest, shrinking), kept alive
+   * here because a filter's output holds only a weak reference to its source. */
+  std::vector<ProcessObject::Pointer> m_Pipeline;
+  /** The geometry given to the volume instead of the one ITK's image IO reports: checked
+   * DICOM header geometry, or for stacks and TIFF files (no trustworthy geometry) origin
+   * 0, 1 mm spacing, identity direction. */
+  bool                           m_ReplaceGeometry{ false };
+  PointType                      m_GeometryOrigin{ 0.0 };
+  SpacingType                    m_GeometrySpacing{ 1.0 };
+  OutputImageType::DirectionType m_GeometryDirection{ OutputImageType::DirectionType::GetIdentity() };
+  OutputImageType::Pointer       m_PipelineOutput;
+  bool                           m_IsDicom{ false };
+  /** Size of the pixel data of one DICOM file, to detect truncated files. */
+  uintmax_t m_DicomPixelBytes{ 0 };
+  /** Files of the region of interest: [first, end) of SliceFileNames. */
+  size_t m_FirstSliceToRead{ 0 };
+  size_t m_EndSliceToRead{ 0 };
+};
+} // end namespace itk
+
+#endif

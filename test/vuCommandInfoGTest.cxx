@@ -1,0 +1,181 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// The info subcommand run as a user runs it: JSON on success, one line on standard
+// error and a non-zero exit status on failure.
+#include "itkCTVolumeReader.h"
+#include "itkImageFileWriter.h"
+#include "itkStatisticsImageFilter.h"
+
+#include "gtest/gtest.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+
+namespace {
+namespace fs = std::filesystem;
+
+const std::string kPhilips = std::string(VU_TEST_DATA_DIR) + "/dicom/philips_ct/S2010";
+
+struct ToolRun
+{
+  int         Status{ -1 };
+  std::string Out;
+  std::string Err;
+};
+
+std::string
+Slurp(const std::string & file)
+{
+  std::ifstream     in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::string
+WorkDirectory()
+{
+  const auto *   info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path directory = fs::path(VU_BINARY_DIR) / "Testing" / "Temporary" / "vuCommandInfo" / info->name();
+  fs::remove_all(directory);
+  fs::create_directories(directory);
+  return directory.string();
+}
+
+ToolRun
+Info(const std::string & arguments, const std::string & directory)
+{
+  const std::string out = directory + "/stdout.txt", err = directory + "/stderr.txt";
+  const std::string command =
+    std::string(VU_BINARY_DIR) + "/bin/virtual-unwrap info " + arguments + " >'" + out + "' 2>'" + err + "'";
+  const int status = std::system(command.c_str());
+  ToolRun   run;
+  run.Status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  run.Out = Slurp(out);
+  run.Err = Slurp(err);
+  return run;
+}
+
+void
+ExpectOneLineError(const ToolRun & run, const std::string & part)
+{
+  EXPECT_NE(run.Status, 0);
+  EXPECT_TRUE(run.Out.empty()) << run.Out;
+  EXPECT_EQ(run.Err.rfind("virtual-unwrap: error: ", 0), 0u) << run.Err;
+  EXPECT_EQ(std::count(run.Err.begin(), run.Err.end(), '\n'), 1) << run.Err;
+  EXPECT_NE(run.Err.find(part), std::string::npos) << run.Err;
+}
+} // namespace
+
+TEST(vuCommandInfo, PhilipsSeriesWithStatistics)
+{
+  const std::string directory = WorkDirectory();
+  const ToolRun     run = Info("'" + kPhilips + "' --stats -o '" + directory + "/info.json'", directory);
+  ASSERT_EQ(run.Status, 0) << run.Err;
+  EXPECT_TRUE(run.Err.empty()) << run.Err;
+  const nlohmann::json json = nlohmann::json::parse(Slurp(directory + "/info.json"));
+  EXPECT_EQ(json["size"], nlohmann::json({ 512, 512, 28 }));
+  EXPECT_NEAR(json["spacing"][0].get<double>(), 0.451171875, 1e-9);
+  EXPECT_NEAR(json["spacing"][2].get<double>(), 5.0, 1e-9);
+  EXPECT_NEAR(json["origin"][2].get<double>(), 696.21, 1e-9);
+  EXPECT_EQ(json["direction"], nlohmann::json({ { 1.0, 0.0, 0.0 }, { 0.0, 1.0, 0.0 }, { 0.0, 0.0, 1.0 } }));
+  EXPECT_EQ(json["pixel_type"], "uint16");
+  EXPECT_EQ(json["modality"], "CT");
+  EXPECT_EQ(json["series"]["chosen"]["number"], "201");
+  EXPECT_EQ(json["series"]["chosen"]["slices"], 28);
+  EXPECT_EQ(json["series"]["chosen"]["description"], "STD BRAIN 5MM");
+  EXPECT_TRUE(json["series"]["alternatives"].empty());
+  EXPECT_EQ(json["rescale"]["slope"], 1.0);
+  EXPECT_EQ(json["rescale"]["intercept"], -1024.0);
+  EXPECT_TRUE(json["warnings"].empty());
+
+  // The streamed statistics of the tool equal those of the volume read whole.
+  auto reader = itk::CTVolumeReader::New();
+  reader->SetFileName(kPhilips);
+  auto statistics = itk::StatisticsImageFilter<itk::CTVolumeReader::OutputImageType>::New();
+  statistics->SetInput(reader->GetOutput());
+  statistics->Update();
+  EXPECT_EQ(json["stats"]["min"].get<double>(), statistics->GetMinimum());
+  EXPECT_EQ(json["stats"]["max"].get<double>(), statistics->GetMaximum());
+  EXPECT_NEAR(json["stats"]["mean"].get<double>(), statistics->GetMean(), 1e-6);
+}
+
+TEST(vuCommandInfo, RegionOfInterestAndShrinking)
+{
+  const std::string directory = WorkDirectory();
+  const ToolRun     run = Info("'" + kPhilips + "' --roi 100 120 5 200 150 10 --shrink 2", directory);
+  ASSERT_EQ(run.Status, 0) << run.Err;
+  const nlohmann::json json = nlohmann::json::parse(run.Out);
+  EXPECT_EQ(json["size"], nlohmann::json({ 100, 75, 5 }));
+  EXPECT_EQ(json["full_size"], nlohmann::json({ 512, 512, 28 }));
+  EXPECT_NEAR(json["spacing"][2].get<double>(), 10.0, 1e-9);
+  EXPECT_FALSE(json.contains("stats"));
+
+  // Physical corners: x and y beyond the volume (clipped, with a warning), z 700..712 mm
+  // holds the slices at 701.21, 706.21 and 711.21 mm.
+  const ToolRun physical = Info("'" + kPhilips + "' --roi-mm -1000 -1000 700 1000 1000 712", directory);
+  ASSERT_EQ(physical.Status, 0) << physical.Err;
+  const nlohmann::json clipped = nlohmann::json::parse(physical.Out);
+  EXPECT_EQ(clipped["size"], nlohmann::json({ 512, 512, 3 }));
+  EXPECT_NEAR(clipped["origin"][2].get<double>(), 701.21, 1e-9);
+  EXPECT_EQ(clipped["warnings"].size(), 1u);
+}
+
+TEST(vuCommandInfo, TiffStackWithSpacing)
+{
+  const std::string directory = WorkDirectory();
+  using SliceType = itk::Image<unsigned short, 2>;
+  for (unsigned z = 0; z < 4; ++z)
+  {
+    auto slice = SliceType::New();
+    slice->SetRegions(SliceType::SizeType{ { 8, 6 } });
+    slice->Allocate();
+    slice->FillBuffer(static_cast<unsigned short>(100 * z));
+    itk::WriteImage(slice, directory + "/scan_" + std::to_string(z) + ".tiff");
+  }
+  const ToolRun run = Info("'" + directory + "/scan_*.tiff' --spacing 0.01 0.01 0.02 --stats", directory);
+  ASSERT_EQ(run.Status, 0) << run.Err;
+  const nlohmann::json json = nlohmann::json::parse(run.Out);
+  EXPECT_EQ(json["size"], nlohmann::json({ 8, 6, 4 }));
+  EXPECT_EQ(json["spacing"], nlohmann::json({ 0.01, 0.01, 0.02 }));
+  EXPECT_EQ(json["pixel_type"], "uint16");
+  EXPECT_TRUE(json["modality"].is_null());
+  EXPECT_TRUE(json["series"]["chosen"].is_null());
+  EXPECT_TRUE(json["warnings"].empty());
+  EXPECT_EQ(json["stats"]["min"], 0.0);
+  EXPECT_EQ(json["stats"]["max"], 300.0);
+  EXPECT_EQ(json["stats"]["mean"], 150.0);
+}
+
+TEST(vuCommandInfo, BadInputGivesOneLineAndNonZeroStatus)
+{
+  const std::string directory = WorkDirectory();
+  ExpectOneLineError(Info("'" + directory + "/missing'", directory), "no such file or directory: " + directory);
+  ExpectOneLineError(Info("'" + kPhilips + "' --spacing 1 -1 1", directory), "--spacing");
+  ExpectOneLineError(Info("'" + kPhilips + "' --roi 0 0 20 10 10 10", directory), "not inside the volume");
+  ExpectOneLineError(Info("'" + kPhilips + "' --series 77", directory), "no series '77'");
+  ExpectOneLineError(Info("'" + kPhilips + "/I10'", directory), "single 2D image");
+  const ToolRun failed = Info("'" + directory + "/missing' -o '" + directory + "/out.json'", directory);
+  EXPECT_NE(failed.Status, 0);
+  EXPECT_FALSE(fs::exists(directory + "/out.json"));
+}
