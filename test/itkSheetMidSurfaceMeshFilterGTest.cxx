@@ -1,0 +1,238 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkFlatteningDistortionCalculator.h"
+#include "itkMassSpringSheetFlattener.h"
+#include "itkMeshFileWriter.h"
+#include "itkSheetMeshErrorCalculator.h"
+#include "itkSheetMidSurfaceMeshFilter.h"
+#include "itkSheetPhantomSource.h"
+#include "itkSheetSegmentationImageFilter.h"
+#include "vuTestHelpers.h"
+
+#include "gtest/gtest.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+namespace {
+using VolumeType = itk::Image<float, 3>;
+using MaskType = itk::Image<unsigned char, 3>;
+using MeshType = itk::Mesh<float, 3>;
+using SegmentationType = itk::SheetSegmentationImageFilter<VolumeType, MaskType>;
+using SurfaceType = itk::SheetMidSurfaceMeshFilter<MaskType, MeshType>;
+
+struct PhantomResult
+{
+  itk::SheetMesh              Mesh;
+  itk::SheetPhantomGeometry   Geometry;
+  double                      Voxel{ 0.0 };
+  double                      Threshold{ 0.0 };
+  itk::SheetSurfaceMethodEnum Method{ itk::SheetSurfaceMethodEnum::Auto };
+  size_t                      Warnings{ 0 };
+};
+
+// Segments and meshes a preset phantom with default parameters, as the tool does.
+PhantomResult
+SegmentPhantom(const std::string & preset)
+{
+  auto source = itk::SheetPhantomSource::New();
+  source->ApplyPreset(preset);
+  auto segmentation = SegmentationType::New();
+  segmentation->SetInput(source->GetOutput());
+  auto surface = SurfaceType::New();
+  surface->SetInput(segmentation->GetOutput());
+  surface->SetIntensityImage(source->GetOutput());
+  surface->Update();
+  PhantomResult result;
+  result.Mesh = surface->GetSheetMesh();
+  result.Geometry = source->GetGeometry();
+  result.Voxel = std::min(source->GetVoxelSize(), source->GetSliceSpacing());
+  result.Threshold = segmentation->GetThreshold();
+  result.Method = surface->GetReport().Method;
+  result.Warnings = surface->GetWarnings().size();
+  const std::string directory = std::string(VU_BINARY_DIR) + "/Testing/Segmentation";
+  std::filesystem::create_directories(directory);
+  auto writer = itk::MeshFileWriter<MeshType>::New();
+  writer->SetInput(surface->GetOutput());
+  writer->SetFileName(directory + "/" + preset + ".obj");
+  writer->Update();
+  return result;
+}
+
+// Number of connected pieces of a mesh (through shared vertices).
+size_t
+CountConnectedPieces(const itk::SheetMesh & mesh)
+{
+  std::vector<uint32_t> parent(mesh.GetNumberOfPoints());
+  for (uint32_t i = 0; i < parent.size(); ++i)
+  {
+    parent[i] = i;
+  }
+  auto find = [&](uint32_t i) {
+    while (parent[i] != i)
+    {
+      i = parent[i] = parent[parent[i]];
+    }
+    return i;
+  };
+  for (size_t t = 0; t < mesh.GetNumberOfTriangles(); ++t)
+  {
+    parent[find(mesh.Triangles[3 * t + 1])] = find(mesh.Triangles[3 * t]);
+    parent[find(mesh.Triangles[3 * t + 2])] = find(mesh.Triangles[3 * t]);
+  }
+  size_t pieces = 0;
+  for (uint32_t i = 0; i < parent.size(); ++i)
+  {
+    pieces += find(i) == i ? 1 : 0;
+  }
+  return pieces;
+}
+
+struct Figures
+{
+  double MeanDistance, MaximumDistance, Coverage;
+  size_t LayerJumps;
+};
+
+Figures
+Measure(const std::string & preset, const PhantomResult & result)
+{
+  auto calculator = itk::SheetMeshErrorCalculator::New();
+  calculator->SetGeometry(result.Geometry);
+  calculator->SetMesh(result.Mesh);
+  calculator->SetVoxelSize(result.Voxel);
+  calculator->Compute();
+  const Figures figures{ calculator->GetMeanVertexDistance(),
+                         calculator->GetMaximumVertexDistance(),
+                         calculator->GetCoverage(),
+                         calculator->GetNumberOfLayerJumps() };
+  std::printf("[ figures  ] %s: method %s, threshold %.0f, %zu points (%d x %d grid), %zu triangles, "
+              "vertex distance mean %.3f max %.3f voxels, coverage %.2f %%, layer jumps %zu, %zu warning(s)\n",
+              preset.c_str(),
+              itk::ToString(result.Method),
+              result.Threshold,
+              result.Mesh.GetNumberOfPoints(),
+              result.Mesh.GridRows,
+              result.Mesh.GridColumns,
+              result.Mesh.GetNumberOfTriangles(),
+              figures.MeanDistance,
+              figures.MaximumDistance,
+              100.0 * figures.Coverage,
+              figures.LayerJumps,
+              result.Warnings);
+  return figures;
+}
+} // namespace
+
+TEST(SheetMidSurfaceMeshFilter, BasicObjectMethods)
+{
+  auto filter = SurfaceType::New();
+  VU_EXPECT_ITK_MACROS(ITK_EXERCISE_BASIC_OBJECT_METHODS(filter, SheetMidSurfaceMeshFilter, ImageToMeshFilter));
+  VU_EXPECT_ITK_MACROS(
+    ITK_TEST_SET_GET_VALUE(0.3, (filter->SetSpacingAlongSheet(0.3), filter->GetSpacingAlongSheet())));
+  VU_EXPECT_ITK_MACROS(ITK_TEST_SET_GET_VALUE(0.4, (filter->SetSpacingAlongAxis(0.4), filter->GetSpacingAlongAxis())));
+  VU_EXPECT_ITK_MACROS(
+    ITK_TEST_SET_GET_VALUE(0.2, (filter->SetChordErrorFraction(0.2), filter->GetChordErrorFraction())));
+  filter->SetMethod(itk::SheetSurfaceMethodEnum::General);
+  EXPECT_EQ(filter->GetMethod(), itk::SheetSurfaceMethodEnum::General);
+}
+
+TEST(SheetMidSurfaceMeshFilter, StandardRollIsAccurateAndFlattens)
+{
+  const PhantomResult result = SegmentPhantom("standard");
+  const Figures       figures = Measure("standard", result);
+  EXPECT_EQ(result.Method, itk::SheetSurfaceMethodEnum::Roll);
+  EXPECT_LE(figures.MeanDistance, 0.5);
+  EXPECT_GE(figures.Coverage, 0.97);
+  EXPECT_EQ(figures.LayerJumps, 0u);
+  EXPECT_EQ(CountConnectedPieces(result.Mesh), 1u);
+  ASSERT_TRUE(result.Mesh.IsGridStructured());
+
+  // Normals point to the roll axis, like the phantom's SurfaceNormal (the inked face).
+  size_t agreeing = 0;
+  for (size_t t = 0; t < result.Mesh.GetNumberOfTriangles(); ++t)
+  {
+    const double * p[3];
+    for (int v = 0; v < 3; ++v)
+    {
+      p[v] = &result.Mesh.Points[3 * result.Mesh.Triangles[3 * t + v]];
+    }
+    const double u[3] = { p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2] };
+    const double v[3] = { p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2] };
+    const double n[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0] };
+    double       s, w, d, truth[3];
+    result.Geometry.Project(p[0], s, w, d);
+    result.Geometry.SurfaceNormal(s, w, truth);
+    agreeing += n[0] * truth[0] + n[1] * truth[1] + n[2] * truth[2] > 0.0 ? 1 : 0;
+  }
+  EXPECT_EQ(agreeing, result.Mesh.GetNumberOfTriangles());
+
+  // Columns run from the inner end outwards: column 0 projects near s = 0.
+  double s0, w0, d0;
+  result.Geometry.Project(&result.Mesh.Points[0], s0, w0, d0);
+  EXPECT_LT(s0, 0.1 * result.Geometry.GetSheetLength());
+
+  itk::MassSpringSheetFlattener flattener;
+  const itk::SheetMesh          flat = flattener.Flatten(result.Mesh);
+  auto                          distortion = itk::FlatteningDistortionCalculator::New();
+  distortion->SetSurfaceMesh(result.Mesh);
+  distortion->SetFlatMesh(flat);
+  distortion->Compute();
+  std::printf("[ figures  ] standard flattened: edge strain mean %.5f p95 %.5f max %.5f, flipped %lu\n",
+              distortion->GetEdgeStrainMean(),
+              distortion->GetEdgeStrainP95(),
+              distortion->GetEdgeStrainMax(),
+              static_cast<unsigned long>(distortion->GetNumberOfFlippedTriangles()));
+  EXPECT_LT(distortion->GetEdgeStrainP95(), 0.01);
+  EXPECT_EQ(distortion->GetNumberOfFlippedTriangles(), 0u);
+}
+
+TEST(SheetMidSurfaceMeshFilter, PapyrusMicroCTIsAccurate)
+{
+  const PhantomResult result = SegmentPhantom("papyrus-microct");
+  const Figures       figures = Measure("papyrus-microct", result);
+  EXPECT_LE(figures.MeanDistance, 0.5);
+  EXPECT_GE(figures.Coverage, 0.97);
+  EXPECT_EQ(figures.LayerJumps, 0u);
+  EXPECT_EQ(CountConnectedPieces(result.Mesh), 1u);
+}
+
+TEST(SheetMidSurfaceMeshFilter, TightAndCanvasAreCoveredWithoutLayerJumps)
+{
+  for (const char * preset : { "tight", "canvas-medical" })
+  {
+    const PhantomResult result = SegmentPhantom(preset);
+    const Figures       figures = Measure(preset, result);
+    EXPECT_GE(figures.Coverage, 0.90) << preset;
+    EXPECT_EQ(figures.LayerJumps, 0u) << preset;
+    EXPECT_EQ(CountConnectedPieces(result.Mesh), 1u) << preset;
+  }
+}
+
+TEST(SheetMidSurfaceMeshFilter, SquashedAndFoldedGiveOneOpenMesh)
+{
+  for (const char * preset : { "squashed", "folded" })
+  {
+    const PhantomResult result = SegmentPhantom(preset);
+    Measure(preset, result);
+    EXPECT_EQ(CountConnectedPieces(result.Mesh), 1u) << preset;
+    EXPECT_TRUE(result.Mesh.IsGridStructured()) << preset;
+  }
+}
