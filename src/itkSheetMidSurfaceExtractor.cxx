@@ -471,7 +471,9 @@ TraceRollSlice(const SliceSampler & sampler, const TraceContext & context)
   // Follows the spiral one angular step at a time in direction dir (+1: counter-clockwise).
   // The predicted radius continues a line fitted to the last accepted steps; the nearest
   // crossing is taken only if it is much closer than the local turn spacing.
-  auto follow = [&](int dir) {
+  // Radius change per step of a squashed roll stays far below this.
+  const double maximumSlope = 0.05 * pitch;
+  auto         follow = [&](int dir) {
     std::vector<std::pair<long, double>> accepted{ { 0, startRadius } };
     double                               slope = 0.0;
     double                               missedArc = 0.0;
@@ -507,7 +509,10 @@ TraceRollSlice(const SliceSampler & sampler, const TraceContext & context)
           localSpacing = std::min(localSpacing, list[best + 1] - list[best]);
         }
       }
-      if (best < list.size() && bestDistance < 0.4 * localSpacing)
+      // Both the prediction and the last accepted radius must agree: a prediction that
+      // drifts over the sheet's cut end must not carry the trace onto the next turn.
+      if (best < list.size() && bestDistance < 0.4 * localSpacing &&
+          std::abs(list[best] - last.second) < 0.4 * localSpacing)
       {
         accepted.emplace_back(step, list[best]);
         missedArc = 0.0;
@@ -527,7 +532,7 @@ TraceRollSlice(const SliceSampler & sampler, const TraceContext & context)
           const double denominator = count * sxx - sx * sx;
           if (denominator > 0.0)
           {
-            slope = (count * sxy - sx * sy) / denominator;
+            slope = std::clamp((count * sxy - sx * sy) / denominator, -maximumSlope, maximumSlope);
           }
         }
       }
@@ -925,22 +930,28 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
     itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: the traced sheet is only " << referenceLength
                              << " mm long, less than two voxels");
   }
+  // Slices whose traced length is close to the median; the others (cut short, or with a
+  // wrong turn) are interpolated from their neighbours.
   std::vector<char> good(nz, 0);
   long              firstGood = -1, lastGood = -1;
-  for (size_t k = 0; k < nz; ++k)
-  {
-    good[k] = lengths[k] > 0.0 && std::abs(lengths[k] - referenceLength) <= 0.05 * referenceLength + 3.0 * voxel;
-    if (good[k])
+  auto              selectGood = [&](double tolerance) {
+    firstGood = lastGood = -1;
+    for (size_t k = 0; k < nz; ++k)
     {
-      firstGood = firstGood < 0 ? static_cast<long>(k) : firstGood;
-      lastGood = static_cast<long>(k);
+      good[k] = lengths[k] > 0.0 && std::abs(lengths[k] - referenceLength) <= tolerance;
+      if (good[k])
+      {
+        firstGood = firstGood < 0 ? static_cast<long>(k) : firstGood;
+        lastGood = static_cast<long>(k);
+      }
     }
-  }
-  if (lastGood <= firstGood)
-  {
-    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: the sheet could be traced in one slice only; the volume "
-                                "is too small along the roll axis");
-  }
+    if (lastGood <= firstGood)
+    {
+      itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: the sheet could be traced in one slice only; the volume "
+                                               "is too small along the roll axis");
+    }
+  };
+  selectGood(0.05 * referenceLength + 3.0 * voxel);
   if (method == SheetSurfaceMethodEnum::General)
   {
     // Orient every slice like the middle one: the end nearer its first point comes first.
@@ -1012,6 +1023,10 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
     voxel, std::sqrt(8.0 * m_Report.MinimumCurvatureRadius * parameters.ChordErrorFraction * m_Report.SheetThickness));
   const double hs = parameters.SpacingAlongSheet > 0.0 ? parameters.SpacingAlongSheet : automatic;
   const double hw = parameters.SpacingAlongAxis > 0.0 ? parameters.SpacingAlongAxis : std::max(hs, sz);
+
+  // A slice shorter or longer than the median by a sizeable part of a column would shear
+  // the grid: the columns sit at the same fraction of every slice's length.
+  selectGood(std::min(0.05 * referenceLength, std::max(0.25 * hs, 2.0 * voxel)) + voxel);
 
   const auto columns = static_cast<size_t>(std::max(2.0, std::ceil(referenceLength / hs) + 1.0));
   if (columns * (static_cast<size_t>((lastGood - firstGood) * sz / hw) + 2) > (size_t{ 1 } << 31))
