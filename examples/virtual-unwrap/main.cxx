@@ -86,6 +86,7 @@ main(int argc, char * argv[])
   app.get_formatter()->column_width(42);
   vu::RegisterDistortionCommand(app);
   vu::RegisterPhantomCommand(app);
+  vu::RegisterSegmentCommand(app);
 
   try
   {
