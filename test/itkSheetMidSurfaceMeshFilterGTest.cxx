@@ -239,3 +239,105 @@ TEST(SheetMidSurfaceMeshFilter, SquashedAndFoldedGiveOneOpenMesh)
     EXPECT_TRUE(result.Mesh.IsGridStructured()) << preset;
   }
 }
+
+namespace {
+MaskType::Pointer
+MakeMask(unsigned size, unsigned depth)
+{
+  auto                 mask = MaskType::New();
+  MaskType::RegionType region;
+  region.SetSize({ { size, size, depth } });
+  mask->SetRegions(region);
+  mask->Allocate();
+  mask->FillBuffer(0);
+  return mask;
+}
+
+// A flat sheet, three voxels thick, across the slices at rows y0..y0+2, columns x0..x1.
+void
+AddFlatSheet(MaskType * mask, long x0, long x1, long y0)
+{
+  const auto size = mask->GetLargestPossibleRegion().GetSize();
+  for (long z = 0; z < static_cast<long>(size[2]); ++z)
+  {
+    for (long y = y0; y < y0 + 3; ++y)
+    {
+      for (long x = x0; x <= x1; ++x)
+      {
+        mask->SetPixel({ { x, y, z } }, 1);
+      }
+    }
+  }
+}
+} // namespace
+
+TEST(SheetMidSurfaceMeshFilter, FlatSheetWithAStrayPieceMeshesTheSheetAndWarns)
+{
+  auto mask = MakeMask(40, 12);
+  mask->SetSpacing(0.5);
+  AddFlatSheet(mask, 4, 35, 10);
+  // A small separate fragment.
+  mask->SetPixel({ { 30, 30, 5 } }, 1);
+  mask->SetPixel({ { 30, 31, 5 } }, 1);
+  auto filter = SurfaceType::New();
+  filter->SetInput(mask);
+  filter->SetMethod(itk::SheetSurfaceMethodEnum::General);
+  filter->Update();
+  const itk::SheetMesh & mesh = filter->GetSheetMesh();
+  ASSERT_EQ(filter->GetWarnings().size(), 1u);
+  EXPECT_NE(filter->GetWarnings()[0].find("2 disconnected pieces"), std::string::npos) << filter->GetWarnings()[0];
+  EXPECT_EQ(CountConnectedPieces(mesh), 1u);
+  ASSERT_TRUE(mesh.IsGridStructured());
+  // The mid-surface of voxel rows 10..12 is y = 11 voxels = 5.5 mm; x spans the sheet.
+  double minimumX = 1e9, maximumX = -1e9;
+  for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    EXPECT_NEAR(mesh.Points[3 * i + 1], 5.5, 0.05);
+    minimumX = std::min(minimumX, mesh.Points[3 * i]);
+    maximumX = std::max(maximumX, mesh.Points[3 * i]);
+  }
+  EXPECT_LT(minimumX, 2.0 + 0.5);
+  EXPECT_GT(maximumX, 17.5 - 0.5);
+  EXPECT_EQ(filter->GetOutput()->GetNumberOfPoints(), mesh.GetNumberOfPoints());
+  EXPECT_EQ(filter->GetOutput()->GetNumberOfCells(), mesh.GetNumberOfTriangles());
+  EXPECT_EQ(filter->GetReport().Method, itk::SheetSurfaceMethodEnum::General);
+
+  // User spacing: about 2 mm along the sheet.
+  filter->SetSpacingAlongSheet(2.0);
+  filter->SetSpacingAlongAxis(1.0);
+  filter->Update();
+  EXPECT_NEAR(filter->GetReport().SpacingAlongSheet, 2.0, 0.3);
+  EXPECT_NEAR(filter->GetReport().SpacingAlongAxis, 1.0, 0.15);
+}
+
+TEST(SheetMidSurfaceMeshFilter, BadInputThrows)
+{
+  auto filter = SurfaceType::New();
+  filter->SetInput(MakeMask(20, 10));
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject); // empty mask
+
+  auto tiny = MakeMask(2, 2);
+  tiny->FillBuffer(1);
+  filter->SetInput(tiny);
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject); // too small
+
+  auto mask = MakeMask(40, 12);
+  AddFlatSheet(mask, 4, 35, 10);
+  filter->SetInput(mask);
+  auto                   intensity = VolumeType::New();
+  VolumeType::RegionType region;
+  region.SetSize({ { 10, 10, 10 } });
+  intensity->SetRegions(region);
+  intensity->Allocate();
+  filter->SetIntensityImage(intensity);
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject); // intensity of another size
+  filter->SetIntensityImage(nullptr);
+  filter->SetChordErrorFraction(0.0);
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject); // bad parameter
+
+  auto single = MakeMask(40, 1);
+  AddFlatSheet(single, 4, 35, 10);
+  filter->SetChordErrorFraction(0.1);
+  filter->SetInput(single);
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject); // one slice only
+}
