@@ -36,15 +36,22 @@ namespace itk {
  *
  * The mask's face-connected components are labelled; the largest is meshed (one sheet =
  * one connected mesh) and, when there are several, a warning says so. Only the bounding
- * box of that component (plus two voxels) is read. The slices (third image axis) must cut
- * across the roll axis; the physical frame (origin, spacing, direction) is respected, and
- * triangle winding is preserved under a mirroring direction matrix.
+ * box of that component (plus two voxels) is read. The roll axis is estimated as the
+ * least-squares line through the slices' centroids of the sheet; when it is tilted from
+ * the slice normal (third image axis) by more than AxisTiltTolerance degrees, or the
+ * in-plane voxels are not square, the box is resampled (itk::ResampleImageFilter: nearest
+ * neighbour for the mask, linear for the intensities) onto a grid whose third axis is the
+ * roll axis and whose in-plane voxels are square, and a warning says so. The physical
+ * frame (origin, spacing, direction) is respected, and triangle winding is preserved under
+ * a mirroring direction matrix.
  *
  * Inputs: 0, the mask (non-zero = sheet; required); IntensityImage (optional, same
  * geometry as the mask, Image<float, 3>, e.g. HU): crossings are centred on the
  * intensity-weighted middle of the sheet (sub-voxel).
  * Parameters: Method (Auto; Roll, General), SpacingAlongSheet (mm, 0 = automatic,
- * >= 0), SpacingAlongAxis (mm, 0 = automatic, >= 0), ChordErrorFraction (0.1, in (0, 1]).
+ * >= 0), SpacingAlongAxis (mm, 0 = automatic, >= 0), ChordErrorFraction (0.1, in (0, 1]),
+ * AxisTiltTolerance (degrees, 2, >= 0; the slices must still cut the roll, so tilts up to
+ * about 45 degrees are handled).
  * Outputs: the itk::Mesh (triangles; grid rows, columns and per-point (row, column) in its
  * meta-data dictionary, keys of itkSheetMeshAdaptor.h), GetSheetMesh() (the same as plain
  * arrays, GridIndex set), GetReport() (method used, spacings, thickness, smallest radius
@@ -86,6 +93,8 @@ public:
   itkGetConstMacro(SpacingAlongAxis, double);
   itkSetMacro(ChordErrorFraction, double);
   itkGetConstMacro(ChordErrorFraction, double);
+  itkSetMacro(AxisTiltTolerance, double);
+  itkGetConstMacro(AxisTiltTolerance, double);
 
   const SheetMesh &
   GetSheetMesh() const
@@ -112,10 +121,20 @@ protected:
   GenerateData() override;
 
 private:
+  using SheetImageType = Image<uint8_t, 3>;
+  using AxisType = Vector<double, 3>;
+  static AxisType
+  EstimateRollAxis(const SheetImageType * sheetMask);
+  void
+  AlignWithRollAxis(typename SheetImageType::Pointer &     sheetMask,
+                    typename IntensityImageType::Pointer & sheetIntensity,
+                    std::vector<std::string> &             warnings) const;
+
   SheetSurfaceMethodEnum m_Method{ SheetSurfaceMethodEnum::Auto };
   double                 m_SpacingAlongSheet{ 0.0 };
   double                 m_SpacingAlongAxis{ 0.0 };
   double                 m_ChordErrorFraction{ 0.1 };
+  double                 m_AxisTiltTolerance{ 2.0 };
   SheetMesh              m_SheetMesh;
   SheetMidSurfaceReport  m_Report;
 };
