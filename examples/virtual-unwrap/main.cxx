@@ -88,6 +88,7 @@ main(int argc, char * argv[])
   vu::RegisterFlattenCommand(app);
   vu::RegisterPhantomCommand(app);
   vu::RegisterInfoCommand(app);
+  vu::RegisterSegmentCommand(app);
 
   try
   {

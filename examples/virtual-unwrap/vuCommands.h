@@ -42,6 +42,8 @@ void
 RegisterPhantomCommand(CLI::App & app);
 void
 RegisterInfoCommand(CLI::App & app);
+void
+RegisterSegmentCommand(CLI::App & app);
 
 /** Writes text to path atomically: to a temporary name beside it, then renamed, so a
  * failure never leaves a half-written file. */

@@ -1,0 +1,194 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// virtual-unwrap segment VOLUME -o DIR: sheet mask, mid-surface mesh and a JSON summary.
+#include "vuCommands.h"
+
+#include "itkImageFileReader.h"
+#include "itkImageFileWriter.h"
+#include "itkMesh.h"
+#include "itkMeshFileWriter.h"
+#include "itkSheetMidSurfaceMeshFilter.h"
+#include "itkSheetSegmentationImageFilter.h"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+
+namespace vu {
+namespace {
+struct SegmentOptions
+{
+  std::string   Volume;
+  std::string   Output;
+  std::string   Threshold{ "auto" };
+  std::string   MeshSpacing{ "auto" };
+  std::string   Method{ "auto" };
+  double        ChordError{ 0.1 };
+  unsigned long MinimumComponent{ 100 };
+  unsigned int  Closing{ 0 };
+};
+
+// "auto" or a number; anything else is the user's mistake.
+bool
+ParseAutoOrNumber(const std::string & text, const std::string & option, double & value)
+{
+  if (text == "auto")
+  {
+    return false;
+  }
+  size_t used = 0;
+  try
+  {
+    value = std::stod(text, &used);
+  }
+  catch (const std::exception &)
+  {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(value))
+  {
+    throw UsageError(option + " must be a number or auto, not '" + text + "'");
+  }
+  return true;
+}
+
+void
+RunSegment(const SegmentOptions & options)
+{
+  using VolumeType = itk::Image<float, 3>;
+  using MaskType = itk::Image<unsigned char, 3>;
+  using MeshType = itk::Mesh<float, 3>;
+  if (!std::filesystem::exists(options.Volume))
+  {
+    throw UsageError("volume not found: " + options.Volume);
+  }
+  double     threshold = 0.0, spacing[2] = { 0.0, 0.0 };
+  const bool fixedThreshold = ParseAutoOrNumber(options.Threshold, "--threshold", threshold);
+  if (options.MeshSpacing != "auto")
+  {
+    const auto   comma = options.MeshSpacing.find(',');
+    const bool   both = comma != std::string::npos;
+    const double along =
+      (ParseAutoOrNumber(options.MeshSpacing.substr(0, comma), "--mesh-spacing", spacing[0]), spacing[0]);
+    spacing[1] = along;
+    if (both)
+    {
+      ParseAutoOrNumber(options.MeshSpacing.substr(comma + 1), "--mesh-spacing", spacing[1]);
+    }
+    if (!(spacing[0] > 0.0) || !(spacing[1] > 0.0))
+    {
+      throw UsageError("--mesh-spacing must be positive");
+    }
+  }
+  const itk::SheetSurfaceMethodEnum method = itk::SheetSurfaceMethodFromString(options.Method);
+  const auto                        start = std::chrono::steady_clock::now();
+
+  auto reader = itk::ImageFileReader<VolumeType>::New();
+  reader->SetFileName(options.Volume);
+  reader->Update();
+  auto segmentation = itk::SheetSegmentationImageFilter<VolumeType, MaskType>::New();
+  segmentation->SetInput(reader->GetOutput());
+  segmentation->SetAutomaticThreshold(!fixedThreshold);
+  segmentation->SetThreshold(threshold);
+  segmentation->SetMinimumComponentSize(options.MinimumComponent);
+  segmentation->SetClosingRadius(options.Closing);
+  auto surface = itk::SheetMidSurfaceMeshFilter<MaskType, MeshType>::New();
+  surface->SetInput(segmentation->GetOutput());
+  surface->SetIntensityImage(reader->GetOutput());
+  surface->SetMethod(method);
+  surface->SetSpacingAlongSheet(spacing[0]);
+  surface->SetSpacingAlongAxis(spacing[1]);
+  surface->SetChordErrorFraction(options.ChordError);
+  surface->Update();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  std::filesystem::create_directories(options.Output);
+  const std::filesystem::path directory(options.Output);
+  auto                        maskWriter = itk::ImageFileWriter<MaskType>::New();
+  maskWriter->SetInput(segmentation->GetOutput());
+  maskWriter->SetFileName((directory / "mask.mha").string());
+  maskWriter->UseCompressionOn();
+  maskWriter->Update();
+  for (const char * name : { "surface.obj", "surface.vtk" })
+  {
+    auto meshWriter = itk::MeshFileWriter<MeshType>::New();
+    meshWriter->SetInput(surface->GetOutput());
+    meshWriter->SetFileName((directory / name).string());
+    meshWriter->Update();
+  }
+
+  const itk::SheetMesh &             mesh = surface->GetSheetMesh();
+  const itk::SheetMidSurfaceReport & report = surface->GetReport();
+  nlohmann::json                     json;
+  json["volume"] = options.Volume;
+  json["threshold"] = { { "value", segmentation->GetThreshold() }, { "automatic", !fixedThreshold } };
+  json["components_kept"] = segmentation->GetNumberOfComponents();
+  json["method"] = itk::ToString(report.Method);
+  json["points"] = mesh.GetNumberOfPoints();
+  json["triangles"] = mesh.GetNumberOfTriangles();
+  json["grid"] = { { "rows", mesh.GridRows }, { "columns", mesh.GridColumns } };
+  json["mesh_spacing_mm"] = { { "along_sheet", report.SpacingAlongSheet }, { "along_axis", report.SpacingAlongAxis } };
+  json["sheet_thickness_mm"] = report.SheetThickness;
+  json["sheet_length_mm"] = report.SheetLength;
+  json["minimum_curvature_radius_mm"] = report.MinimumCurvatureRadius;
+  json["interpolated_slices"] = report.InterpolatedSlices;
+  json["warnings"] = report.Warnings;
+  json["conventions"] = "rows along the roll axis (w, slice order), columns along the sheet (s) from its inner end; "
+                        "point (row r, column c) at index r * columns + c; roll: normals towards the roll axis, "
+                        "general: normals dP/dw x dP/ds";
+  json["seconds"] = seconds;
+  EmitJson(json, (directory / "segment.json").string());
+  std::cout << "segment: " << itk::ToString(report.Method) << ", threshold " << segmentation->GetThreshold() << ", "
+            << mesh.GetNumberOfPoints() << " points, " << mesh.GetNumberOfTriangles() << " triangles -> "
+            << options.Output << std::endl;
+  for (const std::string & warning : report.Warnings)
+  {
+    std::cerr << "virtual-unwrap: warning: " << warning << std::endl;
+  }
+}
+} // namespace
+
+void
+RegisterSegmentCommand(CLI::App & app)
+{
+  auto *                command = app.add_subcommand("segment",
+                                      "Segment the sheet of a CT volume and mesh its mid-surface: writes mask.mha, "
+                                                     "surface.obj, surface.vtk and segment.json into DIR.");
+  static SegmentOptions options;
+  command->add_option("VOLUME", options.Volume, "CT volume (MHA, NRRD, NIfTI, ...), in HU")->required();
+  command->add_option("-o,--output", options.Output, "output directory (created; files in it are replaced)")
+    ->required();
+  command->add_option("--threshold", options.Threshold, "material threshold in HU, or auto (Otsu on the object)")
+    ->capture_default_str();
+  command
+    ->add_option("--mesh-spacing",
+                 options.MeshSpacing,
+                 "mesh spacing in mm along the sheet and the roll axis (MM or S,W), or auto (from curvature and "
+                 "thickness)")
+    ->capture_default_str();
+  command->add_option("--method", options.Method, "roll, general or auto")->capture_default_str();
+  command->add_option("--chord-error", options.ChordError, "automatic spacing: chord error / sheet thickness")
+    ->capture_default_str()
+    ->check(CLI::Range(1e-6, 1.0));
+  command->add_option("--min-component", options.MinimumComponent, "remove components smaller than this (voxels)")
+    ->capture_default_str();
+  command->add_option("--closing", options.Closing, "binary closing radius in voxels (0: off)")->capture_default_str();
+  command->callback([] { RunSegment(options); });
+}
+} // namespace vu

@@ -1,0 +1,180 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkSheetMidSurfaceExtractor_h
+#define itkSheetMidSurfaceExtractor_h
+
+#include "VirtualUnwrappingExport.h"
+#include "itkSheetMesh.h"
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace itk {
+/** How the mid-surface of a sheet is traced in each slice. */
+enum class SheetSurfaceMethodEnum : uint8_t
+{
+  /** Roll first; the general tracer when the roll tracer does not explain the mask. */
+  Auto,
+  /** Spiral tracing in polar coordinates about the roll axis (rolled sheets). */
+  Roll,
+  /** Skeleton of each slice's mask (folded, wavy or other open sheets). */
+  General
+};
+VirtualUnwrapping_EXPORT const char *
+ToString(SheetSurfaceMethodEnum method);
+/** "auto", "roll" or "general"; throws itk::ExceptionObject on another name. */
+VirtualUnwrapping_EXPORT SheetSurfaceMethodEnum
+SheetSurfaceMethodFromString(const std::string & name);
+
+/** A volume as plain arrays, x fastest: Mask (non-zero = sheet material, required) and
+ * Intensity (optional, same size, any units in which the sheet is brighter than air). The
+ * frame is the voxel grid scaled by Spacing: voxel (i, j, k) sits at (i sx, j sy, k sz) mm.
+ * The slices (constant k) must cut across the roll axis. */
+struct VirtualUnwrapping_EXPORT SheetVolumeView
+{
+  const uint8_t * Mask{ nullptr };
+  const float *   Intensity{ nullptr };
+  size_t          Size[3]{ 0, 0, 0 };
+  double          Spacing[3]{ 1.0, 1.0, 1.0 };
+};
+
+/** Parameters of SheetMidSurfaceExtractor (mm). */
+struct VirtualUnwrapping_EXPORT SheetMidSurfaceParameters
+{
+  SheetSurfaceMethodEnum Method{ SheetSurfaceMethodEnum::Auto };
+  /** Grid spacing along the sheet (s); 0: automatic (see SheetMidSurfaceExtractor). >= 0. */
+  double SpacingAlongSheet{ 0.0 };
+  /** Grid spacing across the sheet, along the roll axis (w); 0: automatic. >= 0. */
+  double SpacingAlongAxis{ 0.0 };
+  /** Automatic spacing: largest chord error h^2 / (8 R), as a fraction of the sheet
+   * thickness, at the smallest radius of curvature R. In (0, 1]. */
+  double ChordErrorFraction{ 0.1 };
+};
+
+/** What SheetMidSurfaceExtractor::Extract found. */
+struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
+{
+  SheetSurfaceMethodEnum Method{ SheetSurfaceMethodEnum::Roll };
+  double                 SpacingAlongSheet{ 0.0 };
+  double                 SpacingAlongAxis{ 0.0 };
+  /** Estimated from the mask: area of a slice's material over its traced length. */
+  double SheetThickness{ 0.0 };
+  /** Smallest radius of curvature of the traced curves (5th percentile). */
+  double MinimumCurvatureRadius{ 0.0 };
+  /** Median traced length of the sheet in a slice (mm). */
+  double SheetLength{ 0.0 };
+  /** Roll method: the roll axis, centre (x, y) at the first slice and its drift per mm of z. */
+  double AxisCentre[2]{ 0.0, 0.0 };
+  double AxisSlope[2]{ 0.0, 0.0 };
+  size_t SlicesWithMaterial{ 0 };
+  /** Slices inside the meshed range whose trace failed, interpolated from neighbours. */
+  size_t                   InterpolatedSlices{ 0 };
+  std::vector<std::string> Warnings;
+};
+
+/** \class SheetMidSurfaceExtractor
+ * \brief Builds an open, grid-structured triangle mesh on the mid-surface of one rolled or
+ * folded sheet from its segmentation mask (and, optionally, the CT intensities), on plain
+ * arrays; itk::SheetMidSurfaceMeshFilter is the ITK wrapper.
+ *
+ * A closed isosurface of a thin sheet has two faces and cannot be unrolled, so the sheet's
+ * centre curve is traced in every slice (slices cut across the roll axis) and neighbouring
+ * slices are stitched into a grid: rows are positions along the roll axis w (increasing
+ * with the slice index), columns arc length s along the sheet, the same column index
+ * meaning the same fraction of the slice's traced length (so the grid is nearly
+ * isometric), point (row r, column c) at index r * columns + c.
+ *
+ * Roll method: the roll axis is the least-squares line through the slices' mask
+ * centroids. In each slice, rays from the axis are sampled (bilinear, a quarter voxel
+ * apart; angular step half a voxel at the outermost material); every run of material on a
+ * ray is a crossing of the sheet, placed at the intensity-weighted middle of the run (sub
+ * voxel; weights are the intensity above the midpoint between air and material, over the
+ * run widened by a voxel; without intensities the interpolated mask) and runs longer than
+ * 1.6 typical thicknesses (touching turns) are split evenly. The spiral is followed from
+ * the crossing of smallest radius, both ways, step by step in angle: the next crossing is
+ * the one closest to the radius predicted by a line fitted to the last accepted steps,
+ * accepted only within 0.4 of the local turn spacing, so the trace never jumps to the
+ * neighbouring turn; it ends after two voxels of arc without a crossing. The radius is
+ * smoothed along the trace, the ends are extended along their tangents to the end of the
+ * material, and the innermost end is s = 0.
+ *
+ * General method: in each slice the largest 2D component of the mask is thinned
+ * (itk::BinaryThinningImageFilter), the longest path of the skeleton is traced from end to
+ * end, smoothed, moved to the intensity-weighted middle of the sheet along its normal and
+ * extended to the ends of the material; slices are oriented like the middle slice.
+ *
+ * Slices whose traced length differs from the median by more than 5 % + 3 voxels are
+ * interpolated from their neighbours (a warning says how many). Rows average the slices
+ * within one row spacing (triangular weights), which suppresses the noise of single
+ * slices. Automatic spacing along s: h = sqrt(8 R f t), the largest chord error f t at
+ * the smallest radius of curvature R (ChordErrorFraction f, thickness t, both measured),
+ * but not finer than the in-plane voxel size; along w: h, but not finer than the slice
+ * spacing.
+ *
+ * Normals: triangles are oriented so that their normals point to the roll axis (the
+ * inside face) for the roll method; for the general method they are dP/dw x dP/ds. For
+ * the phantoms' counter-clockwise spiral both agree with itk::SheetPhantomGeometry's
+ * SurfaceNormal. Points are in the view's frame (mm, voxel 0 at the origin).
+ *
+ * Extract() throws itk::ExceptionObject with a one-line message on an empty mask, a volume
+ * smaller than 3 x 3 x 2 voxels, a mask no slice of which can be traced, or bad
+ * parameters. The progress callback receives 0..1 and aborts (exception) when it returns
+ * false.
+ *
+ * \ingroup VirtualUnwrapping
+ */
+class VirtualUnwrapping_EXPORT SheetMidSurfaceExtractor
+{
+public:
+  using ProgressCallback = std::function<bool(double)>;
+
+  void
+  SetParameters(const SheetMidSurfaceParameters & parameters)
+  {
+    m_Parameters = parameters;
+  }
+  const SheetMidSurfaceParameters &
+  GetParameters() const
+  {
+    return m_Parameters;
+  }
+  void
+  SetProgressCallback(ProgressCallback callback)
+  {
+    m_Progress = std::move(callback);
+  }
+
+  SheetMesh
+  Extract(const SheetVolumeView & volume);
+
+  const SheetMidSurfaceReport &
+  GetReport() const
+  {
+    return m_Report;
+  }
+
+private:
+  SheetMidSurfaceParameters m_Parameters;
+  SheetMidSurfaceReport     m_Report;
+  ProgressCallback          m_Progress;
+};
+} // end namespace itk
+
+#endif

@@ -1,0 +1,421 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkSheetMidSurfaceMeshFilter_hxx
+#define itkSheetMidSurfaceMeshFilter_hxx
+
+#include "itkConnectedComponentImageFilter.h"
+#include "itkImageRegionConstIteratorWithIndex.h"
+#include "itkNearestNeighborInterpolateImageFunction.h"
+#include "itkRelabelComponentImageFilter.h"
+#include "itkResampleImageFilter.h"
+#include "itkSheetMeshAdaptor.h"
+#include "itkSheetMidSurfaceMeshFilter.h"
+
+#include <numeric>
+#include <sstream>
+
+#include "vnl/algo/vnl_determinant.h"
+
+namespace itk {
+template <typename TMaskImage, typename TOutputMesh>
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::SheetMidSurfaceMeshFilter()
+{
+  this->SetNumberOfRequiredInputs(1);
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+void
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::SetIntensityImage(const IntensityImageType * image)
+{
+  this->ProcessObject::SetNthInput(1, const_cast<IntensityImageType *>(image));
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+auto
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GetIntensityImage() const -> const IntensityImageType *
+{
+  return dynamic_cast<const IntensityImageType *>(this->ProcessObject::GetInput(1));
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+void
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
+{
+  const MaskImageType *      mask = this->GetInput(0);
+  const IntensityImageType * intensity = this->GetIntensityImage();
+  if (mask == nullptr || mask->GetBufferedRegion().GetNumberOfPixels() == 0)
+  {
+    itkExceptionMacro(<< "the mask is empty");
+  }
+  const auto region = mask->GetBufferedRegion();
+  if (intensity != nullptr && intensity->GetBufferedRegion() != region)
+  {
+    itkExceptionMacro(<< "the intensity image (" << intensity->GetBufferedRegion().GetSize()
+                      << ") does not cover the mask (" << region.GetSize() << ")");
+  }
+  this->UpdateProgress(0.0f);
+
+  // One sheet = one connected mesh: keep the largest face-connected component.
+  using LabelImageType = Image<SizeValueType, 3>;
+  auto components = ConnectedComponentImageFilter<MaskImageType, LabelImageType>::New();
+  components->SetInput(mask);
+  components->FullyConnectedOff();
+  auto relabel = RelabelComponentImageFilter<LabelImageType, LabelImageType>::New();
+  relabel->SetInput(components->GetOutput());
+  relabel->Update();
+  const LabelImageType * labels = relabel->GetOutput();
+  m_Report = SheetMidSurfaceReport{};
+  if (relabel->GetNumberOfObjects() == 0)
+  {
+    itkExceptionMacro(<< "the mask is empty");
+  }
+  std::vector<std::string> warnings;
+  if (relabel->GetNumberOfObjects() > 1)
+  {
+    std::ostringstream text;
+    text << "the mask holds " << relabel->GetNumberOfObjects() << " disconnected pieces; only the largest ("
+         << relabel->GetSizeOfObjectsInPixels()[0] << " of "
+         << std::accumulate(relabel->GetSizeOfObjectsInPixels().begin(),
+                            relabel->GetSizeOfObjectsInPixels().end(),
+                            SizeValueType{ 0 })
+         << " voxels) was meshed";
+    warnings.push_back(text.str());
+  }
+
+  // Read only the bounding box of that sheet, plus two voxels.
+  using IndexType = typename MaskImageType::IndexType;
+  IndexType lower = region.GetUpperIndex(), upper = region.GetIndex();
+  for (ImageRegionConstIteratorWithIndex<LabelImageType> it(labels, region); !it.IsAtEnd(); ++it)
+  {
+    if (it.Get() == 1)
+    {
+      const IndexType index = it.GetIndex();
+      for (unsigned d = 0; d < 3; ++d)
+      {
+        lower[d] = std::min(lower[d], index[d]);
+        upper[d] = std::max(upper[d], index[d]);
+      }
+    }
+  }
+  typename MaskImageType::RegionType box;
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    lower[d] -= 2;
+    upper[d] += 2;
+  }
+  box.SetIndex(lower);
+  box.SetUpperIndex(upper);
+  box.Crop(region);
+
+  // The sheet's box as images of their own (index 0 at the box corner).
+  using SheetImageType = Image<uint8_t, 3>;
+  typename SheetImageType::RegionType boxRegion;
+  boxRegion.SetSize(box.GetSize());
+  typename SheetImageType::PointType boxOrigin;
+  mask->TransformIndexToPhysicalPoint(box.GetIndex(), boxOrigin);
+  auto sheetMask = SheetImageType::New();
+  sheetMask->SetRegions(boxRegion);
+  sheetMask->SetOrigin(boxOrigin);
+  sheetMask->SetSpacing(mask->GetSpacing());
+  sheetMask->SetDirection(mask->GetDirection());
+  sheetMask->Allocate();
+  typename IntensityImageType::Pointer sheetIntensity;
+  if (intensity != nullptr)
+  {
+    sheetIntensity = IntensityImageType::New();
+    sheetIntensity->CopyInformation(sheetMask);
+    sheetIntensity->SetRegions(boxRegion);
+    sheetIntensity->Allocate();
+  }
+  {
+    size_t offset = 0;
+    for (ImageRegionConstIteratorWithIndex<LabelImageType> it(labels, box); !it.IsAtEnd(); ++it, ++offset)
+    {
+      sheetMask->GetBufferPointer()[offset] = it.Get() == 1 ? 1 : 0;
+      if (intensity != nullptr)
+      {
+        sheetIntensity->GetBufferPointer()[offset] = intensity->GetPixel(it.GetIndex());
+      }
+    }
+  }
+  this->AlignWithRollAxis(sheetMask, sheetIntensity, warnings);
+
+  SheetVolumeView view;
+  view.Mask = sheetMask->GetBufferPointer();
+  view.Intensity = sheetIntensity ? sheetIntensity->GetBufferPointer() : nullptr;
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    view.Size[d] = sheetMask->GetBufferedRegion().GetSize()[d];
+    view.Spacing[d] = sheetMask->GetSpacing()[d];
+  }
+
+  SheetMidSurfaceExtractor  extractor;
+  SheetMidSurfaceParameters parameters;
+  parameters.Method = m_Method;
+  parameters.SpacingAlongSheet = m_SpacingAlongSheet;
+  parameters.SpacingAlongAxis = m_SpacingAlongAxis;
+  parameters.ChordErrorFraction = m_ChordErrorFraction;
+  extractor.SetParameters(parameters);
+  extractor.SetProgressCallback([this](double fraction) {
+    this->UpdateProgress(static_cast<float>(0.1 + 0.9 * fraction));
+    return !this->GetAbortGenerateData();
+  });
+  SheetMesh sheet = extractor.Extract(view);
+  m_Report = extractor.GetReport();
+  m_Report.Warnings.insert(m_Report.Warnings.begin(), warnings.begin(), warnings.end());
+
+  // From the (possibly resampled) box's scaled voxel frame to the physical frame.
+  const auto & direction = sheetMask->GetDirection();
+  const auto & origin = sheetMask->GetOrigin();
+  for (size_t i = 0; i < sheet.GetNumberOfPoints(); ++i)
+  {
+    double q[3] = { sheet.Points[3 * i], sheet.Points[3 * i + 1], sheet.Points[3 * i + 2] };
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      sheet.Points[3 * i + r] = origin[r] + direction[r][0] * q[0] + direction[r][1] * q[1] + direction[r][2] * q[2];
+    }
+  }
+  if (vnl_determinant(direction.GetVnlMatrix()) < 0.0)
+  {
+    for (size_t t = 0; t < sheet.GetNumberOfTriangles(); ++t)
+    {
+      std::swap(sheet.Triangles[3 * t + 1], sheet.Triangles[3 * t + 2]);
+    }
+  }
+  m_SheetMesh = std::move(sheet);
+
+  typename OutputMeshType::Pointer mesh = SheetMeshToMesh<OutputMeshType>(m_SheetMesh);
+  OutputMeshType *                 output = this->GetOutput();
+  output->SetPoints(mesh->GetPoints());
+  output->SetCells(mesh->GetCells());
+  output->SetMetaDataDictionary(mesh->GetMetaDataDictionary());
+  this->UpdateProgress(1.0f);
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+auto
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxis(const SheetImageType * sheetMask) -> AxisType
+{
+  // Least-squares line i(k), j(k) through the centroids of the middle 60 % of the slices
+  // with material: slices near the ends of a tilted roll cut it partly, which biases them.
+  const auto          size = sheetMask->GetBufferedRegion().GetSize();
+  std::vector<double> count(size[2], 0.0), sumI(size[2], 0.0), sumJ(size[2], 0.0);
+  size_t              offset = 0;
+  for (size_t k = 0; k < size[2]; ++k)
+  {
+    for (size_t j = 0; j < size[1]; ++j)
+    {
+      for (size_t i = 0; i < size[0]; ++i, ++offset)
+      {
+        if (sheetMask->GetBufferPointer()[offset] != 0)
+        {
+          count[k] += 1.0;
+          sumI[k] += static_cast<double>(i);
+          sumJ[k] += static_cast<double>(j);
+        }
+      }
+    }
+  }
+  long first = -1, last = -1;
+  for (size_t k = 0; k < size[2]; ++k)
+  {
+    if (count[k] > 0.0)
+    {
+      first = first < 0 ? static_cast<long>(k) : first;
+      last = static_cast<long>(k);
+    }
+  }
+  const long margin = (last - first) / 5;
+  double     sw = 0, sk = 0, skk = 0, si = 0, sj = 0, ski = 0, skj = 0;
+  for (long k = first + margin; k <= last - margin && k >= 0; ++k)
+  {
+    const auto kk = static_cast<double>(k);
+    sw += count[k];
+    sk += count[k] * kk;
+    skk += count[k] * kk * kk;
+    si += sumI[k];
+    sj += sumJ[k];
+    ski += kk * sumI[k];
+    skj += kk * sumJ[k];
+  }
+  const double denominator = sw * skk - sk * sk;
+  double       slope[2] = { 0.0, 0.0 };
+  if (denominator > 1e-9 * sw * sw)
+  {
+    slope[0] = (sw * ski - sk * si) / denominator;
+    slope[1] = (sw * skj - sk * sj) / denominator;
+  }
+  const auto & spacing = sheetMask->GetSpacing();
+  const auto & direction = sheetMask->GetDirection();
+  AxisType     axis;
+  for (unsigned r = 0; r < 3; ++r)
+  {
+    axis[r] =
+      direction[r][0] * spacing[0] * slope[0] + direction[r][1] * spacing[1] * slope[1] + direction[r][2] * spacing[2];
+  }
+  axis.Normalize();
+  return axis;
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+void
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AlignWithRollAxis(
+  typename SheetImageType::Pointer &     sheetMask,
+  typename IntensityImageType::Pointer & sheetIntensity,
+  std::vector<std::string> &             warnings) const
+{
+  const typename SheetImageType::Pointer     originalMask = sheetMask;
+  const typename IntensityImageType::Pointer originalIntensity = sheetIntensity;
+  const auto &                               spacing = originalMask->GetSpacing();
+  const auto &                               direction = originalMask->GetDirection();
+  const auto                                 size = originalMask->GetBufferedRegion().GetSize();
+  const double                               inPlane = std::min(spacing[0], spacing[1]);
+  const bool                                 square = std::abs(spacing[0] - spacing[1]) <= 1e-6 * inPlane;
+  auto                                       angle = [](const AxisType & a, const AxisType & b) {
+    return std::acos(std::clamp(a * b, -1.0, 1.0)) * 180.0 / Math::pi;
+  };
+  auto sliceNormal = [](const SheetImageType * image) {
+    AxisType normal;
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      normal[r] = image->GetDirection()[r][2];
+    }
+    return normal;
+  };
+  const AxisType originalNormal = sliceNormal(originalMask);
+  AxisType       axis = EstimateRollAxis(originalMask);
+  if (angle(axis, originalNormal) <= m_AxisTiltTolerance && square)
+  {
+    return;
+  }
+  // Each pass resamples the original box along the current estimate; the estimate from a
+  // better aligned grid is better (partial slices bias it less), so it converges in a few.
+  for (int pass = 0; pass < 4; ++pass)
+  {
+    AxisType firstAxis;
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      firstAxis[r] = direction[r][0];
+    }
+    firstAxis -= (firstAxis * axis) * axis;
+    firstAxis.Normalize();
+    const AxisType                         secondAxis = CrossProduct(axis, firstAxis);
+    typename SheetImageType::DirectionType newDirection;
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      newDirection[r][0] = firstAxis[r];
+      newDirection[r][1] = secondAxis[r];
+      newDirection[r][2] = axis[r];
+    }
+    typename SheetImageType::SpacingType newSpacing;
+    newSpacing[0] = newSpacing[1] = inPlane;
+    newSpacing[2] = spacing[2];
+    // Bounds of the original box's corners in the new frame.
+    double       lower[3] = { 1e300, 1e300, 1e300 }, upper[3] = { -1e300, -1e300, -1e300 };
+    const auto & origin = originalMask->GetOrigin();
+    for (unsigned corner = 0; corner < 8; ++corner)
+    {
+      typename SheetImageType::IndexType index;
+      for (unsigned d = 0; d < 3; ++d)
+      {
+        index[d] = (corner >> d) & 1U ? static_cast<IndexValueType>(size[d]) - 1 : 0;
+      }
+      typename SheetImageType::PointType point;
+      originalMask->TransformIndexToPhysicalPoint(index, point);
+      for (unsigned d = 0; d < 3; ++d)
+      {
+        double coordinate = 0.0;
+        for (unsigned r = 0; r < 3; ++r)
+        {
+          coordinate += newDirection[r][d] * (point[r] - origin[r]);
+        }
+        lower[d] = std::min(lower[d], coordinate);
+        upper[d] = std::max(upper[d], coordinate);
+      }
+    }
+    typename SheetImageType::PointType newOrigin;
+    typename SheetImageType::SizeType  newSize;
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      newOrigin[r] =
+        origin[r] + newDirection[r][0] * lower[0] + newDirection[r][1] * lower[1] + newDirection[r][2] * lower[2];
+      newSize[r] = static_cast<SizeValueType>(std::ceil((upper[r] - lower[r]) / newSpacing[r])) + 1;
+    }
+    auto maskResampler = ResampleImageFilter<SheetImageType, SheetImageType>::New();
+    maskResampler->SetInput(originalMask);
+    maskResampler->SetInterpolator(NearestNeighborInterpolateImageFunction<SheetImageType>::New());
+    maskResampler->SetOutputOrigin(newOrigin);
+    maskResampler->SetOutputSpacing(newSpacing);
+    maskResampler->SetOutputDirection(newDirection);
+    maskResampler->SetSize(newSize);
+    maskResampler->SetDefaultPixelValue(0);
+    maskResampler->Update();
+    sheetMask = maskResampler->GetOutput();
+    if (originalIntensity)
+    {
+      const float * values = originalIntensity->GetBufferPointer();
+      const float air = *std::min_element(values, values + originalIntensity->GetBufferedRegion().GetNumberOfPixels());
+      auto        resampler = ResampleImageFilter<IntensityImageType, IntensityImageType>::New();
+      resampler->SetInput(originalIntensity);
+      resampler->SetOutputOrigin(newOrigin);
+      resampler->SetOutputSpacing(newSpacing);
+      resampler->SetOutputDirection(newDirection);
+      resampler->SetSize(newSize);
+      resampler->SetDefaultPixelValue(air);
+      resampler->Update();
+      sheetIntensity = resampler->GetOutput();
+    }
+    const AxisType refined = EstimateRollAxis(sheetMask);
+    if (angle(refined, sliceNormal(sheetMask)) <= 0.25 * m_AxisTiltTolerance)
+    {
+      break;
+    }
+    axis = refined;
+  }
+  std::ostringstream text;
+  text << "the volume was resampled along the roll axis";
+  if (angle(axis, originalNormal) > m_AxisTiltTolerance)
+  {
+    text << ", which is tilted by " << angle(axis, originalNormal) << " degrees from the slice normal";
+  }
+  else
+  {
+    text << " to square in-plane voxels of " << inPlane;
+  }
+  warnings.push_back(text.str());
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+void
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::PrintSelf(std::ostream & os, Indent indent) const
+{
+  Superclass::PrintSelf(os, indent);
+  os << indent << "Method: " << ToString(m_Method) << std::endl;
+  os << indent << "SpacingAlongSheet: " << m_SpacingAlongSheet << std::endl;
+  os << indent << "SpacingAlongAxis: " << m_SpacingAlongAxis << std::endl;
+  os << indent << "ChordErrorFraction: " << m_ChordErrorFraction << std::endl;
+  os << indent << "AxisTiltTolerance: " << m_AxisTiltTolerance << std::endl;
+  os << indent << "SheetMesh: " << m_SheetMesh.GetNumberOfPoints() << " points, " << m_SheetMesh.GetNumberOfTriangles()
+     << " triangles" << std::endl;
+  os << indent << "Report: method " << ToString(m_Report.Method) << ", spacing " << m_Report.SpacingAlongSheet << " x "
+     << m_Report.SpacingAlongAxis << " mm, thickness " << m_Report.SheetThickness << " mm, " << m_Report.Warnings.size()
+     << " warning(s)" << std::endl;
+}
+} // end namespace itk
+
+#endif

@@ -1,0 +1,213 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkSheetSegmentationImageFilter_hxx
+#define itkSheetSegmentationImageFilter_hxx
+
+#include "itkBinaryBallStructuringElement.h"
+#include "itkBinaryMorphologicalClosingImageFilter.h"
+#include "itkBinaryThresholdImageFilter.h"
+#include "itkConnectedComponentImageFilter.h"
+#include "itkImageRegionConstIteratorWithIndex.h"
+#include "itkMinimumMaximumImageCalculator.h"
+#include "itkOtsuThresholdImageFilter.h"
+#include "itkProgressAccumulator.h"
+#include "itkRegionOfInterestImageFilter.h"
+#include "itkRelabelComponentImageFilter.h"
+#include "itkSheetSegmentationImageFilter.h"
+
+namespace itk {
+template <typename TInputImage, typename TMaskImage>
+void
+SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateInputRequestedRegion()
+{
+  Superclass::GenerateInputRequestedRegion();
+  // Thresholds and components are global properties of the volume.
+  if (auto * input = const_cast<InputImageType *>(this->GetInput()))
+  {
+    input->SetRequestedRegionToLargestPossibleRegion();
+  }
+}
+
+template <typename TInputImage, typename TMaskImage>
+void
+SheetSegmentationImageFilter<TInputImage, TMaskImage>::EnlargeOutputRequestedRegion(DataObject * output)
+{
+  Superclass::EnlargeOutputRequestedRegion(output);
+  output->SetRequestedRegionToLargestPossibleRegion();
+}
+
+template <typename TInputImage, typename TMaskImage>
+double
+SheetSegmentationImageFilter<TInputImage, TMaskImage>::ComputeAutomaticThreshold(const InputImageType * input)
+{
+  using OtsuType = OtsuThresholdImageFilter<InputImageType, MaskImageType>;
+  auto whole = OtsuType::New();
+  whole->SetInput(input);
+  whole->SetNumberOfHistogramBins(m_NumberOfHistogramBins);
+  whole->Update();
+  const double first = static_cast<double>(whole->GetThreshold());
+
+  // Bounding box of what lies above the first threshold, padded by two voxels.
+  using IndexType = typename InputImageType::IndexType;
+  const auto region = input->GetLargestPossibleRegion();
+  IndexType  lower = region.GetUpperIndex(), upper = region.GetIndex();
+  bool       any = false;
+  for (ImageRegionConstIteratorWithIndex<InputImageType> it(input, region); !it.IsAtEnd(); ++it)
+  {
+    if (static_cast<double>(it.Get()) > first)
+    {
+      any = true;
+      const IndexType index = it.GetIndex();
+      for (unsigned d = 0; d < ImageDimension; ++d)
+      {
+        lower[d] = std::min(lower[d], index[d]);
+        upper[d] = std::max(upper[d], index[d]);
+      }
+    }
+  }
+  if (!any)
+  {
+    return first;
+  }
+  typename InputImageType::RegionType box;
+  for (unsigned d = 0; d < ImageDimension; ++d)
+  {
+    lower[d] -= 2;
+    upper[d] += 2;
+  }
+  box.SetIndex(lower);
+  box.SetUpperIndex(upper);
+  box.Crop(region);
+  using RoiType = RegionOfInterestImageFilter<InputImageType, InputImageType>;
+  auto roi = RoiType::New();
+  roi->SetInput(input);
+  roi->SetRegionOfInterest(box);
+  auto object = OtsuType::New();
+  object->SetInput(roi->GetOutput());
+  object->SetNumberOfHistogramBins(m_NumberOfHistogramBins);
+  object->Update();
+  return static_cast<double>(object->GetThreshold());
+}
+
+template <typename TInputImage, typename TMaskImage>
+void
+SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
+{
+  const InputImageType * input = this->GetInput();
+  if (input == nullptr || input->GetLargestPossibleRegion().GetNumberOfPixels() == 0)
+  {
+    itkExceptionMacro(<< "the volume is empty");
+  }
+  auto range = MinimumMaximumImageCalculator<InputImageType>::New();
+  range->SetImage(input);
+  range->Compute();
+  const double minimum = static_cast<double>(range->GetMinimum());
+  const double maximum = static_cast<double>(range->GetMaximum());
+  if (!(maximum > minimum))
+  {
+    itkExceptionMacro(<< "the volume is constant (" << minimum << "): nothing to segment");
+  }
+  if (m_AutomaticThreshold)
+  {
+    m_Threshold = ComputeAutomaticThreshold(input);
+  }
+  if (!(maximum >= m_Threshold))
+  {
+    itkExceptionMacro(<< "nothing at or above the threshold " << m_Threshold << " (volume maximum " << maximum << ")");
+  }
+
+  auto progress = ProgressAccumulator::New();
+  progress->SetMiniPipelineFilter(this);
+
+  using LabelImageType = Image<SizeValueType, ImageDimension>;
+  auto threshold = BinaryThresholdImageFilter<InputImageType, MaskImageType>::New();
+  threshold->SetInput(input);
+  threshold->SetLowerThreshold(
+    static_cast<InputPixelType>(std::max(m_Threshold, static_cast<double>(NumericTraits<InputPixelType>::lowest()))));
+  threshold->SetInsideValue(1);
+  threshold->SetOutsideValue(0);
+  auto components = ConnectedComponentImageFilter<MaskImageType, LabelImageType>::New();
+  components->SetInput(threshold->GetOutput());
+  components->FullyConnectedOff();
+  auto relabel = RelabelComponentImageFilter<LabelImageType, LabelImageType>::New();
+  relabel->SetInput(components->GetOutput());
+  relabel->SetMinimumObjectSize(m_MinimumComponentSize);
+  auto keep = BinaryThresholdImageFilter<LabelImageType, MaskImageType>::New();
+  keep->SetInput(relabel->GetOutput());
+  keep->SetLowerThreshold(1);
+  keep->SetInsideValue(m_ForegroundValue);
+  keep->SetOutsideValue(0);
+  progress->RegisterInternalFilter(threshold, 0.1f);
+  progress->RegisterInternalFilter(components, 0.4f);
+  progress->RegisterInternalFilter(relabel, 0.2f);
+  progress->RegisterInternalFilter(keep, m_ClosingRadius > 0 ? 0.1f : 0.3f);
+  relabel->Update();
+  m_NumberOfComponents = relabel->GetNumberOfObjects();
+  if (relabel->GetOriginalNumberOfObjects() == 0)
+  {
+    itkExceptionMacro(<< "nothing at or above the threshold " << m_Threshold);
+  }
+  if (m_NumberOfComponents == 0)
+  {
+    itkExceptionMacro(<< "no component of at least " << m_MinimumComponentSize << " voxels above the threshold "
+                      << m_Threshold << " (only noise)");
+  }
+  m_LargestComponentSize = relabel->GetSizeOfObjectsInPixels().front();
+
+  if (m_ClosingRadius > 0)
+  {
+    using KernelType = BinaryBallStructuringElement<MaskPixelType, ImageDimension>;
+    KernelType ball;
+    ball.SetRadius(m_ClosingRadius);
+    ball.CreateStructuringElement();
+    auto closing = BinaryMorphologicalClosingImageFilter<MaskImageType, MaskImageType, KernelType>::New();
+    closing->SetInput(keep->GetOutput());
+    closing->SetKernel(ball);
+    closing->SetForegroundValue(m_ForegroundValue);
+    progress->RegisterInternalFilter(closing, 0.2f);
+    closing->GraftOutput(this->GetOutput());
+    closing->Update();
+    this->GraftOutput(closing->GetOutput());
+  }
+  else
+  {
+    keep->GraftOutput(this->GetOutput());
+    keep->Update();
+    this->GraftOutput(keep->GetOutput());
+  }
+}
+
+template <typename TInputImage, typename TMaskImage>
+void
+SheetSegmentationImageFilter<TInputImage, TMaskImage>::PrintSelf(std::ostream & os, Indent indent) const
+{
+  Superclass::PrintSelf(os, indent);
+  os << indent << "AutomaticThreshold: " << m_AutomaticThreshold << std::endl;
+  os << indent << "Threshold: " << m_Threshold << std::endl;
+  os << indent << "NumberOfHistogramBins: " << m_NumberOfHistogramBins << std::endl;
+  os << indent << "MinimumComponentSize: " << m_MinimumComponentSize << std::endl;
+  os << indent << "ClosingRadius: " << m_ClosingRadius << std::endl;
+  os << indent
+     << "ForegroundValue: " << static_cast<typename NumericTraits<MaskPixelType>::PrintType>(m_ForegroundValue)
+     << std::endl;
+  os << indent << "NumberOfComponents: " << m_NumberOfComponents << std::endl;
+  os << indent << "LargestComponentSize: " << m_LargestComponentSize << std::endl;
+}
+} // end namespace itk
+
+#endif

@@ -1,0 +1,1166 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkSheetMidSurfaceExtractor.h"
+
+#include "itkBinaryThinningImageFilter.h"
+#include "itkConnectedComponentImageFilter.h"
+#include "itkImage.h"
+#include "itkMacro.h"
+#include "itkMultiThreaderBase.h"
+#include "itkRelabelComponentImageFilter.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <sstream>
+
+namespace itk {
+const char *
+ToString(SheetSurfaceMethodEnum method)
+{
+  switch (method)
+  {
+    case SheetSurfaceMethodEnum::Roll:
+      return "roll";
+    case SheetSurfaceMethodEnum::General:
+      return "general";
+    case SheetSurfaceMethodEnum::Auto:
+      break;
+  }
+  return "auto";
+}
+
+SheetSurfaceMethodEnum
+SheetSurfaceMethodFromString(const std::string & name)
+{
+  for (auto method : { SheetSurfaceMethodEnum::Auto, SheetSurfaceMethodEnum::Roll, SheetSurfaceMethodEnum::General })
+  {
+    if (name == ToString(method))
+    {
+      return method;
+    }
+  }
+  itkGenericExceptionMacro(<< "unknown surface method \"" << name << "\" (known: auto, roll, general)");
+}
+
+namespace {
+constexpr double Pi = 3.14159265358979323846;
+
+// A planar curve as x, y pairs (mm).
+using Polyline = std::vector<double>;
+
+double
+Median(std::vector<double> values)
+{
+  if (values.empty())
+  {
+    return 0.0;
+  }
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+double
+Percentile(std::vector<double> values, double fraction)
+{
+  if (values.empty())
+  {
+    return 0.0;
+  }
+  const auto at = values.begin() + static_cast<std::ptrdiff_t>(fraction * static_cast<double>(values.size() - 1));
+  std::nth_element(values.begin(), at, values.end());
+  return *at;
+}
+
+size_t
+PolylineSize(const Polyline & line)
+{
+  return line.size() / 2;
+}
+
+double
+ArcLength(const Polyline & line)
+{
+  double length = 0.0;
+  for (size_t i = 1; i < PolylineSize(line); ++i)
+  {
+    length += std::hypot(line[2 * i] - line[2 * i - 2], line[2 * i + 1] - line[2 * i - 1]);
+  }
+  return length;
+}
+
+// Moving average whose window shrinks symmetrically near the ends, so the ends stay put.
+Polyline
+Smooth(const Polyline & line, int halfWidth)
+{
+  const auto n = static_cast<int>(PolylineSize(line));
+  Polyline   out(line.size());
+  for (int i = 0; i < n; ++i)
+  {
+    const int h = std::min({ halfWidth, i, n - 1 - i });
+    double    x = 0.0, y = 0.0;
+    for (int j = i - h; j <= i + h; ++j)
+    {
+      x += line[2 * j];
+      y += line[2 * j + 1];
+    }
+    out[2 * i] = x / (2 * h + 1);
+    out[2 * i + 1] = y / (2 * h + 1);
+  }
+  return out;
+}
+
+// n points evenly spaced in arc length from the first to the last point.
+Polyline
+ResampleEvenly(const Polyline & line, size_t n)
+{
+  const size_t        m = PolylineSize(line);
+  std::vector<double> cumulative(m, 0.0);
+  for (size_t i = 1; i < m; ++i)
+  {
+    cumulative[i] = cumulative[i - 1] + std::hypot(line[2 * i] - line[2 * i - 2], line[2 * i + 1] - line[2 * i - 1]);
+  }
+  Polyline out(2 * n);
+  size_t   segment = 1;
+  for (size_t c = 0; c < n; ++c)
+  {
+    const double s = cumulative.back() * static_cast<double>(c) / static_cast<double>(n - 1);
+    while (segment + 1 < m && cumulative[segment] < s)
+    {
+      ++segment;
+    }
+    const double length = cumulative[segment] - cumulative[segment - 1];
+    const double t = length > 0.0 ? std::clamp((s - cumulative[segment - 1]) / length, 0.0, 1.0) : 0.0;
+    for (int d = 0; d < 2; ++d)
+    {
+      out[2 * c + d] = (1.0 - t) * line[2 * (segment - 1) + d] + t * line[2 * segment + d];
+    }
+  }
+  return out;
+}
+
+// Bilinear sampling of one slice of the volume, in mm of the view's frame.
+class SliceSampler
+{
+public:
+  SliceSampler(const SheetVolumeView & volume, size_t slice)
+    : m_NX(volume.Size[0])
+    , m_NY(volume.Size[1])
+    , m_SX(volume.Spacing[0])
+    , m_SY(volume.Spacing[1])
+  {
+    const size_t offset = slice * m_NX * m_NY;
+    m_Mask = volume.Mask + offset;
+    m_Intensity = volume.Intensity != nullptr ? volume.Intensity + offset : nullptr;
+  }
+
+  bool
+  HasIntensity() const
+  {
+    return m_Intensity != nullptr;
+  }
+
+  // Fraction of material; 0 outside the slice.
+  double
+  Mask(double x, double y) const
+  {
+    return Interpolate(
+      x, y, [this](size_t i) { return m_Mask[i] != 0 ? 1.0 : 0.0; }, 0.0);
+  }
+
+  double
+  Intensity(double x, double y, double outside) const
+  {
+    return Interpolate(
+      x, y, [this](size_t i) { return static_cast<double>(m_Intensity[i]); }, outside);
+  }
+
+  size_t
+  CountMaterial() const
+  {
+    return static_cast<size_t>(std::count_if(m_Mask, m_Mask + m_NX * m_NY, [](uint8_t v) { return v != 0; }));
+  }
+
+  size_t
+  NX() const
+  {
+    return m_NX;
+  }
+  size_t
+  NY() const
+  {
+    return m_NY;
+  }
+  const uint8_t *
+  MaskPointer() const
+  {
+    return m_Mask;
+  }
+
+private:
+  template <typename TValue>
+  double
+  Interpolate(double x, double y, const TValue & value, double outside) const
+  {
+    const double u = x / m_SX, v = y / m_SY;
+    const double fu = std::floor(u), fv = std::floor(v);
+    const auto   i0 = static_cast<long>(fu), j0 = static_cast<long>(fv);
+    const double a = u - fu, b = v - fv;
+    double       result = 0.0;
+    for (int dj = 0; dj < 2; ++dj)
+    {
+      for (int di = 0; di < 2; ++di)
+      {
+        const long   i = i0 + di, j = j0 + dj;
+        const double weight = (di != 0 ? a : 1.0 - a) * (dj != 0 ? b : 1.0 - b);
+        const bool   inside = i >= 0 && j >= 0 && i < static_cast<long>(m_NX) && j < static_cast<long>(m_NY);
+        result += weight * (inside ? value(static_cast<size_t>(j) * m_NX + static_cast<size_t>(i)) : outside);
+      }
+    }
+    return result;
+  }
+
+  const uint8_t * m_Mask{ nullptr };
+  const float *   m_Intensity{ nullptr };
+  size_t          m_NX, m_NY;
+  double          m_SX, m_SY;
+};
+
+// What every slice tracer needs besides its slice.
+struct TraceContext
+{
+  double Voxel{ 1.0 };      // in-plane voxel size
+  double Base{ 0.0 };       // intensity halfway between air and material
+  double AirLevel{ 0.0 };   // intensity outside the volume
+  double Centre[2]{ 0, 0 }; // roll axis in this slice
+};
+
+// Weighted centroid of the sheet along a line p + u n, u in [lo, hi]: intensity above the
+// air/material midpoint when available (sub-voxel middle of the sheet), else the mask.
+double
+CentreAlongLine(const SliceSampler & sampler,
+                const TraceContext & context,
+                const double         p[2],
+                const double         n[2],
+                double               lo,
+                double               hi,
+                double               step)
+{
+  double sum = 0.0, moment = 0.0;
+  for (double u = lo; u <= hi + 1e-12; u += step)
+  {
+    const double x = p[0] + u * n[0], y = p[1] + u * n[1];
+    const double weight = sampler.HasIntensity()
+                            ? std::max(0.0, sampler.Intensity(x, y, context.AirLevel) - context.Base)
+                            : sampler.Mask(x, y);
+    sum += weight;
+    moment += weight * u;
+  }
+  return sum > 0.0 ? moment / sum : 0.5 * (lo + hi);
+}
+
+// Extends both ends along their tangents while the material lasts, so that the traced
+// curve reaches the sheet's cut edges.
+void
+ExtendEnds(Polyline & line, const SliceSampler & sampler, double voxel, double maximum)
+{
+  for (int end = 0; end < 2; ++end)
+  {
+    const size_t n = PolylineSize(line);
+    if (n < 2)
+    {
+      return;
+    }
+    // Tangent over about one voxel, away from the end.
+    size_t       last = end == 0 ? 0 : n - 1;
+    size_t       inner = last;
+    const double x0 = line[2 * last], y0 = line[2 * last + 1];
+    while (true)
+    {
+      const size_t next = end == 0 ? inner + 1 : inner - 1;
+      inner = next;
+      if (std::hypot(line[2 * inner] - x0, line[2 * inner + 1] - y0) >= voxel || inner == 0 || inner == n - 1)
+      {
+        break;
+      }
+    }
+    double       tx = x0 - line[2 * inner], ty = y0 - line[2 * inner + 1];
+    const double norm = std::hypot(tx, ty);
+    if (norm <= 0.0)
+    {
+      continue;
+    }
+    tx /= norm;
+    ty /= norm;
+    const double step = 0.25 * voxel;
+    double       reach = 0.0;
+    while (reach + step <= maximum && sampler.Mask(x0 + (reach + step) * tx, y0 + (reach + step) * ty) >= 0.5)
+    {
+      reach += step;
+    }
+    if (reach > 0.0)
+    {
+      const double x = x0 + reach * tx, y = y0 + reach * ty;
+      if (end == 0)
+      {
+        line.insert(line.begin(), { x, y });
+      }
+      else
+      {
+        line.insert(line.end(), { x, y });
+      }
+    }
+  }
+}
+
+// Roll tracer for one slice: crossings along rays, spiral following, smoothing.
+struct RollTrace
+{
+  Polyline Line;
+  double   RayThickness{ 0.0 };
+};
+
+RollTrace
+TraceRollSlice(const SliceSampler & sampler, const TraceContext & context)
+{
+  RollTrace    result;
+  const double voxel = context.Voxel;
+  const double cx = context.Centre[0], cy = context.Centre[1];
+  double       rmax = 0.0;
+  for (size_t j = 0; j < sampler.NY(); ++j)
+  {
+    for (size_t i = 0; i < sampler.NX(); ++i)
+    {
+      if (sampler.MaskPointer()[j * sampler.NX() + i] != 0)
+      {
+        rmax = std::max(rmax, std::hypot(static_cast<double>(i) * voxel - cx, static_cast<double>(j) * voxel - cy));
+      }
+    }
+  }
+  if (rmax <= 0.0)
+  {
+    return result;
+  }
+  rmax += 2.0 * voxel;
+  const double dr = 0.25 * voxel;
+  const auto   nr = static_cast<size_t>(std::ceil(rmax / dr)) + 1;
+  const auto   na = static_cast<long>(std::ceil(2.0 * Pi * rmax / (0.5 * voxel)));
+  const double dphi = 2.0 * Pi / static_cast<double>(na);
+  const auto   pad = static_cast<long>(std::lround(voxel / dr));
+
+  struct Run
+  {
+    double Centre, Start, End;
+  };
+  std::vector<std::vector<Run>> runs(static_cast<size_t>(na));
+  std::vector<double>           lengths;
+  std::vector<double>           mask(nr);
+  for (long k = 0; k < na; ++k)
+  {
+    const double direction[2] = { std::cos(k * dphi), std::sin(k * dphi) };
+    for (size_t j = 0; j < nr; ++j)
+    {
+      mask[j] = sampler.Mask(cx + j * dr * direction[0], cy + j * dr * direction[1]);
+    }
+    std::vector<std::pair<long, long>> spans;
+    for (size_t j = 0; j < nr; ++j)
+    {
+      if (mask[j] >= 0.5)
+      {
+        const auto start = static_cast<long>(j);
+        while (j + 1 < nr && mask[j + 1] >= 0.5)
+        {
+          ++j;
+        }
+        spans.emplace_back(start, static_cast<long>(j));
+      }
+    }
+    const double origin[2] = { cx, cy };
+    for (size_t q = 0; q < spans.size(); ++q)
+    {
+      // Widen by a voxel to catch the blurred flanks, but never past halfway to the next run.
+      long lo = spans[q].first - pad, hi = spans[q].second + pad;
+      if (q > 0)
+      {
+        lo = std::max(lo, (spans[q - 1].second + spans[q].first) / 2 + 1);
+      }
+      if (q + 1 < spans.size())
+      {
+        hi = std::min(hi, (spans[q].second + spans[q + 1].first) / 2);
+      }
+      lo = std::max(lo, 0L);
+      const double centre =
+        sampler.HasIntensity()
+          ? CentreAlongLine(sampler, context, origin, direction, lo * dr, hi * dr, dr)
+          : CentreAlongLine(sampler, context, origin, direction, spans[q].first * dr, spans[q].second * dr, dr);
+      const double start = (spans[q].first - 0.5) * dr, end = (spans[q].second + 0.5) * dr;
+      runs[static_cast<size_t>(k)].push_back({ centre, start, end });
+      lengths.push_back(end - start);
+    }
+  }
+  const double thickness = Median(lengths);
+  if (thickness <= 0.0)
+  {
+    return result;
+  }
+  result.RayThickness = thickness;
+
+  // Touching turns make one long run: split it evenly into sheet-thick crossings.
+  std::vector<std::vector<double>> crossings(static_cast<size_t>(na));
+  std::vector<double>              spacings;
+  for (long k = 0; k < na; ++k)
+  {
+    auto & list = crossings[static_cast<size_t>(k)];
+    for (const Run & run : runs[static_cast<size_t>(k)])
+    {
+      const double length = run.End - run.Start;
+      if (length > 1.6 * thickness)
+      {
+        const long parts = std::max(2L, std::lround(length / thickness));
+        for (long p = 0; p < parts; ++p)
+        {
+          list.push_back(run.Start + (p + 0.5) * length / static_cast<double>(parts));
+        }
+      }
+      else
+      {
+        list.push_back(run.Centre);
+      }
+    }
+    for (size_t q = 1; q < list.size(); ++q)
+    {
+      spacings.push_back(list[q] - list[q - 1]);
+    }
+  }
+  const double pitch = spacings.empty() ? rmax : Median(spacings);
+
+  // Start on the crossing nearest the axis: it lies on the innermost turn.
+  long   startAngle = -1;
+  double startRadius = rmax;
+  for (long k = 0; k < na; ++k)
+  {
+    const auto & list = crossings[static_cast<size_t>(k)];
+    if (!list.empty() && list.front() < startRadius)
+    {
+      startRadius = list.front();
+      startAngle = k;
+    }
+  }
+  if (startAngle < 0)
+  {
+    return result;
+  }
+
+  // Follows the spiral one angular step at a time in direction dir (+1: counter-clockwise).
+  // The predicted radius continues a line fitted to the last accepted steps; the nearest
+  // crossing is taken only if it is much closer than the local turn spacing.
+  // Radius change per step of a squashed roll stays far below this.
+  const double maximumSlope = 0.05 * pitch;
+  auto         follow = [&](int dir) {
+    std::vector<std::pair<long, double>> accepted{ { 0, startRadius } };
+    double                               slope = 0.0;
+    double                               missedArc = 0.0;
+    for (long step = 1; step < 64 * na; ++step)
+    {
+      const auto   k = static_cast<size_t>(((startAngle + dir * step) % na + na) % na);
+      const auto & last = accepted.back();
+      const double predicted = last.second + slope * static_cast<double>(step - last.first);
+      if (predicted <= 0.0 || predicted > rmax)
+      {
+        break;
+      }
+      const auto & list = crossings[k];
+      size_t       best = list.size();
+      double       bestDistance = rmax;
+      for (size_t q = 0; q < list.size(); ++q)
+      {
+        if (std::abs(list[q] - predicted) < bestDistance)
+        {
+          bestDistance = std::abs(list[q] - predicted);
+          best = q;
+        }
+      }
+      double localSpacing = pitch;
+      if (best < list.size())
+      {
+        if (best > 0)
+        {
+          localSpacing = std::min(localSpacing, list[best] - list[best - 1]);
+        }
+        if (best + 1 < list.size())
+        {
+          localSpacing = std::min(localSpacing, list[best + 1] - list[best]);
+        }
+      }
+      // Both the prediction and the last accepted radius must agree: a prediction that
+      // drifts over the sheet's cut end must not carry the trace onto the next turn.
+      if (best < list.size() && bestDistance < 0.4 * localSpacing &&
+          std::abs(list[best] - last.second) < 0.4 * localSpacing)
+      {
+        accepted.emplace_back(step, list[best]);
+        missedArc = 0.0;
+        // Least-squares slope over the last dozen accepted steps.
+        const size_t count = std::min<size_t>(12, accepted.size());
+        if (count >= 3)
+        {
+          double sx = 0, sy = 0, sxx = 0, sxy = 0;
+          for (size_t q = accepted.size() - count; q < accepted.size(); ++q)
+          {
+            const auto x = static_cast<double>(accepted[q].first);
+            sx += x;
+            sy += accepted[q].second;
+            sxx += x * x;
+            sxy += x * accepted[q].second;
+          }
+          const double denominator = count * sxx - sx * sx;
+          if (denominator > 0.0)
+          {
+            slope = std::clamp((count * sxy - sx * sy) / denominator, -maximumSlope, maximumSlope);
+          }
+        }
+      }
+      else
+      {
+        missedArc += predicted * dphi;
+        if (missedArc > 2.0 * voxel)
+        {
+          break;
+        }
+      }
+    }
+    return accepted;
+  };
+  const auto inward = follow(-1);
+  const auto outward = follow(+1);
+  if (inward.size() + outward.size() < 4)
+  {
+    return result;
+  }
+  // The inward trace ends at the inner end: the curve starts there.
+  std::vector<double> angles, radii;
+  for (auto it = inward.rbegin(); it != inward.rend(); ++it)
+  {
+    angles.push_back((startAngle - it->first) * dphi);
+    radii.push_back(it->second);
+  }
+  for (size_t q = 1; q < outward.size(); ++q)
+  {
+    angles.push_back((startAngle + outward[q].first) * dphi);
+    radii.push_back(outward[q].second);
+  }
+  // Smooth the radius along the trace: the noise of single crossings would otherwise make
+  // the curve longer than the sheet.
+  const int           halfWidth = 4;
+  const auto          n = static_cast<int>(radii.size());
+  std::vector<double> smooth(radii.size());
+  for (int i = 0; i < n; ++i)
+  {
+    const int h = std::min({ halfWidth, i, n - 1 - i });
+    double    sum = 0.0;
+    for (int j = i - h; j <= i + h; ++j)
+    {
+      sum += radii[j];
+    }
+    smooth[i] = sum / (2 * h + 1);
+  }
+  result.Line.resize(2 * radii.size());
+  for (size_t q = 0; q < radii.size(); ++q)
+  {
+    result.Line[2 * q] = cx + smooth[q] * std::cos(angles[q]);
+    result.Line[2 * q + 1] = cy + smooth[q] * std::sin(angles[q]);
+  }
+  ExtendEnds(result.Line, sampler, voxel, 2.0 * thickness + 2.0 * voxel);
+  return result;
+}
+
+// General tracer for one slice: longest path of the skeleton of the largest component.
+Polyline
+TraceGeneralSlice(const SliceSampler & sampler, const TraceContext & context, double spacingY)
+{
+  using SliceImage = Image<uint8_t, 2>;
+  using LabelImage = Image<uint32_t, 2>;
+  auto                   slice = SliceImage::New();
+  SliceImage::RegionType region;
+  region.SetSize({ { sampler.NX(), sampler.NY() } });
+  slice->SetRegions(region);
+  slice->Allocate();
+  std::transform(sampler.MaskPointer(),
+                 sampler.MaskPointer() + sampler.NX() * sampler.NY(),
+                 slice->GetBufferPointer(),
+                 [](uint8_t v) { return static_cast<uint8_t>(v != 0 ? 1 : 0); });
+  auto components = ConnectedComponentImageFilter<SliceImage, LabelImage>::New();
+  components->SetInput(slice);
+  components->FullyConnectedOn();
+  components->SetNumberOfWorkUnits(1);
+  auto relabel = RelabelComponentImageFilter<LabelImage, LabelImage>::New();
+  relabel->SetInput(components->GetOutput());
+  relabel->SetNumberOfWorkUnits(1);
+  relabel->Update();
+  const uint32_t * labels = relabel->GetOutput()->GetBufferPointer();
+  uint8_t *        pixels = slice->GetBufferPointer();
+  for (size_t i = 0; i < sampler.NX() * sampler.NY(); ++i)
+  {
+    pixels[i] = labels[i] == 1 ? 1 : 0;
+  }
+  auto thinning = BinaryThinningImageFilter<SliceImage, SliceImage>::New();
+  thinning->SetInput(slice);
+  thinning->SetNumberOfWorkUnits(1);
+  thinning->Update();
+  const uint8_t * skeleton = thinning->GetOutput()->GetBufferPointer();
+
+  const auto nx = static_cast<long>(sampler.NX()), ny = static_cast<long>(sampler.NY());
+  // Breadth-first distances over the 8-connected skeleton; the farthest pixel from any
+  // pixel is an end of the longest path, and the farthest from that end the other end.
+  std::vector<long> parent(static_cast<size_t>(nx * ny), -1);
+  auto              farthest = [&](long from) {
+    std::vector<int> distance(static_cast<size_t>(nx * ny), -1);
+    std::deque<long> queue{ from };
+    distance[static_cast<size_t>(from)] = 0;
+    parent[static_cast<size_t>(from)] = -1;
+    long last = from;
+    while (!queue.empty())
+    {
+      const long p = queue.front();
+      queue.pop_front();
+      last = p;
+      const long px = p % nx, py = p / nx;
+      for (long dy = -1; dy <= 1; ++dy)
+      {
+        for (long dx = -1; dx <= 1; ++dx)
+        {
+          const long qx = px + dx, qy = py + dy;
+          if ((dx == 0 && dy == 0) || qx < 0 || qy < 0 || qx >= nx || qy >= ny)
+          {
+            continue;
+          }
+          const long q = qy * nx + qx;
+          if (skeleton[q] != 0 && distance[static_cast<size_t>(q)] < 0)
+          {
+            distance[static_cast<size_t>(q)] = distance[static_cast<size_t>(p)] + 1;
+            parent[static_cast<size_t>(q)] = p;
+            queue.push_back(q);
+          }
+        }
+      }
+    }
+    return last;
+  };
+  long seed = -1;
+  for (long p = 0; p < nx * ny && seed < 0; ++p)
+  {
+    if (skeleton[p] != 0)
+    {
+      seed = p;
+    }
+  }
+  if (seed < 0)
+  {
+    return {};
+  }
+  const long end = farthest(farthest(seed));
+  Polyline   line;
+  for (long p = end; p >= 0; p = parent[static_cast<size_t>(p)])
+  {
+    line.push_back(static_cast<double>(p % nx) * context.Voxel);
+    line.push_back(static_cast<double>(p / nx) * spacingY);
+  }
+  if (PolylineSize(line) < 3)
+  {
+    return {};
+  }
+  line = Smooth(line, 3);
+
+  // Move each point to the middle of the sheet along the curve's normal.
+  const double thickness = static_cast<double>(sampler.CountMaterial()) * context.Voxel * spacingY / ArcLength(line);
+  const double reach = 0.5 * thickness + context.Voxel;
+  Polyline     refined(line);
+  const size_t n = PolylineSize(line);
+  for (size_t i = 0; i < n; ++i)
+  {
+    const size_t a = i > 0 ? i - 1 : i, b = i + 1 < n ? i + 1 : i;
+    double       tx = line[2 * b] - line[2 * a], ty = line[2 * b + 1] - line[2 * a + 1];
+    const double norm = std::hypot(tx, ty);
+    if (norm <= 0.0)
+    {
+      continue;
+    }
+    const double normal[2] = { -ty / norm, tx / norm };
+    const double point[2] = { line[2 * i], line[2 * i + 1] };
+    const double shift =
+      std::clamp(CentreAlongLine(sampler, context, point, normal, -reach, reach, 0.25 * context.Voxel),
+                 -0.5 * thickness,
+                 0.5 * thickness);
+    refined[2 * i] += shift * normal[0];
+    refined[2 * i + 1] += shift * normal[1];
+  }
+  refined = Smooth(refined, 2);
+  ExtendEnds(refined, sampler, context.Voxel, 2.0 * thickness + 2.0 * context.Voxel);
+  return refined;
+}
+
+// Circumradius of three points.
+double
+Circumradius(const double a[2], const double b[2], const double c[2])
+{
+  const double ab = std::hypot(b[0] - a[0], b[1] - a[1]);
+  const double bc = std::hypot(c[0] - b[0], c[1] - b[1]);
+  const double ca = std::hypot(a[0] - c[0], a[1] - c[1]);
+  const double cross = std::abs((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+  return cross > 0.0 ? ab * bc * ca / (2.0 * cross) : std::numeric_limits<double>::infinity();
+}
+} // namespace
+
+SheetMesh
+SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
+{
+  m_Report = SheetMidSurfaceReport{};
+  const SheetMidSurfaceParameters & parameters = m_Parameters;
+  if (volume.Mask == nullptr)
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: no mask given");
+  }
+  if (volume.Size[0] < 3 || volume.Size[1] < 3 || volume.Size[2] < 2)
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: volume of " << volume.Size[0] << "x" << volume.Size[1] << "x"
+                             << volume.Size[2] << " voxels is too small (at least 3x3x2)");
+  }
+  for (double spacing : volume.Spacing)
+  {
+    if (!(spacing > 0.0) || !std::isfinite(spacing))
+    {
+      itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: voxel spacing must be positive");
+    }
+  }
+  if (!(parameters.SpacingAlongSheet >= 0.0) || !(parameters.SpacingAlongAxis >= 0.0) ||
+      !(parameters.ChordErrorFraction > 0.0 && parameters.ChordErrorFraction <= 1.0))
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: mesh spacings must be >= 0 and the chord error fraction "
+                                "in (0, 1]");
+  }
+  const size_t nx = volume.Size[0], ny = volume.Size[1], nz = volume.Size[2];
+  const double sx = volume.Spacing[0], sy = volume.Spacing[1], sz = volume.Spacing[2];
+  const double voxel = std::min(sx, sy);
+  if (std::abs(sx - sy) > 1e-6 * voxel)
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: in-plane voxels must be square (spacing " << sx << " x "
+                             << sy << "); resample the volume first");
+  }
+  auto report = [this](double fraction) {
+    if (m_Progress && !m_Progress(fraction))
+    {
+      itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: aborted");
+    }
+  };
+
+  // Per-slice material and centroids; the roll axis is the line through the centroids.
+  std::vector<double> area(nz, 0.0), centroidX(nz, 0.0), centroidY(nz, 0.0);
+  for (size_t k = 0; k < nz; ++k)
+  {
+    const uint8_t * mask = volume.Mask + k * nx * ny;
+    double          count = 0.0, mx = 0.0, my = 0.0;
+    for (size_t j = 0; j < ny; ++j)
+    {
+      for (size_t i = 0; i < nx; ++i)
+      {
+        if (mask[j * nx + i] != 0)
+        {
+          count += 1.0;
+          mx += static_cast<double>(i) * sx;
+          my += static_cast<double>(j) * sy;
+        }
+      }
+    }
+    area[k] = count * sx * sy;
+    if (count > 0.0)
+    {
+      centroidX[k] = mx / count;
+      centroidY[k] = my / count;
+      ++m_Report.SlicesWithMaterial;
+    }
+  }
+  if (m_Report.SlicesWithMaterial == 0)
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: the mask is empty");
+  }
+  {
+    double sw = 0, sz1 = 0, szz = 0, sxw = 0, syw = 0, szx = 0, szy = 0;
+    for (size_t k = 0; k < nz; ++k)
+    {
+      const double weight = area[k], z = static_cast<double>(k) * sz;
+      sw += weight;
+      sz1 += weight * z;
+      szz += weight * z * z;
+      sxw += weight * centroidX[k];
+      syw += weight * centroidY[k];
+      szx += weight * z * centroidX[k];
+      szy += weight * z * centroidY[k];
+    }
+    const double denominator = sw * szz - sz1 * sz1;
+    if (denominator > 1e-12 * sw * sw)
+    {
+      m_Report.AxisSlope[0] = (sw * szx - sz1 * sxw) / denominator;
+      m_Report.AxisSlope[1] = (sw * szy - sz1 * syw) / denominator;
+    }
+    m_Report.AxisCentre[0] = (sxw - m_Report.AxisSlope[0] * sz1) / sw;
+    m_Report.AxisCentre[1] = (syw - m_Report.AxisSlope[1] * sz1) / sw;
+  }
+
+  TraceContext context;
+  context.Voxel = voxel;
+  if (volume.Intensity != nullptr)
+  {
+    // Air and material levels: medians of a sample of the voxels outside and inside the mask.
+    std::vector<double> outside, inside;
+    const size_t        total = nx * ny * nz;
+    const size_t        stride = std::max<size_t>(1, total / 400000);
+    for (size_t i = 0; i < total; i += stride)
+    {
+      (volume.Mask[i] != 0 ? inside : outside).push_back(volume.Intensity[i]);
+    }
+    context.AirLevel = Median(outside);
+    context.Base = 0.5 * (context.AirLevel + Median(inside));
+  }
+
+  std::vector<Polyline> traces(nz);
+  std::vector<double>   rayThickness(nz, 0.0);
+  auto                  traceAll = [&](bool roll, double progressStart, double progressEnd) {
+    std::fill(traces.begin(), traces.end(), Polyline{});
+    const size_t batch = 16;
+    for (size_t first = 0; first < nz; first += batch)
+    {
+      const size_t last = std::min(nz, first + batch);
+      auto         traceOne = [&](SizeValueType k) {
+        if (area[k] <= 0.0)
+        {
+          return;
+        }
+        const SliceSampler sampler(volume, k);
+        TraceContext       local = context;
+        if (roll)
+        {
+          local.Centre[0] = m_Report.AxisCentre[0] + m_Report.AxisSlope[0] * static_cast<double>(k) * sz;
+          local.Centre[1] = m_Report.AxisCentre[1] + m_Report.AxisSlope[1] * static_cast<double>(k) * sz;
+          RollTrace trace = TraceRollSlice(sampler, local);
+          traces[k] = std::move(trace.Line);
+          rayThickness[k] = trace.RayThickness;
+        }
+        else
+        {
+          traces[k] = TraceGeneralSlice(sampler, local, sy);
+        }
+      };
+      if (roll)
+      {
+        MultiThreaderBase::New()->ParallelizeArray(first, last, traceOne, nullptr);
+      }
+      else
+      {
+        // ITK's 2D filters inside run single-threaded; nesting them in the pool could stall it.
+        for (size_t k = first; k < last; ++k)
+        {
+          traceOne(k);
+        }
+      }
+      report(progressStart + (progressEnd - progressStart) * static_cast<double>(last) / static_cast<double>(nz));
+    }
+  };
+
+  // A slice is traced well when its curve, as thick as the sheet across the rays, explains
+  // the slice's material.
+  auto rollExplainsMask = [&]() {
+    size_t good = 0;
+    for (size_t k = 0; k < nz; ++k)
+    {
+      if (area[k] > 0.0 && !traces[k].empty() && ArcLength(traces[k]) * rayThickness[k] >= 0.8 * area[k])
+      {
+        ++good;
+      }
+    }
+    return static_cast<double>(good) >= 0.8 * static_cast<double>(m_Report.SlicesWithMaterial);
+  };
+
+  SheetSurfaceMethodEnum method = parameters.Method;
+  if (method != SheetSurfaceMethodEnum::General)
+  {
+    traceAll(true, 0.0, method == SheetSurfaceMethodEnum::Auto ? 0.4 : 0.8);
+    if (method == SheetSurfaceMethodEnum::Auto)
+    {
+      method = rollExplainsMask() ? SheetSurfaceMethodEnum::Roll : SheetSurfaceMethodEnum::General;
+    }
+  }
+  if (method == SheetSurfaceMethodEnum::General)
+  {
+    traceAll(false, parameters.Method == SheetSurfaceMethodEnum::Auto ? 0.4 : 0.0, 0.8);
+  }
+  m_Report.Method = method;
+
+  std::vector<double> lengths(nz, 0.0), traced;
+  for (size_t k = 0; k < nz; ++k)
+  {
+    if (PolylineSize(traces[k]) >= 2)
+    {
+      lengths[k] = ArcLength(traces[k]);
+      traced.push_back(lengths[k]);
+    }
+  }
+  if (traced.empty())
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: no slice of the mask could be traced as a sheet");
+  }
+  const double referenceLength = Median(traced);
+  if (referenceLength < 2.0 * voxel)
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: the traced sheet is only " << referenceLength
+                             << " mm long, less than two voxels");
+  }
+  // Slices whose traced length is close to the median; the others (cut short, or with a
+  // wrong turn) are interpolated from their neighbours.
+  std::vector<char> good(nz, 0);
+  long              firstGood = -1, lastGood = -1;
+  auto              selectGood = [&](double tolerance) {
+    firstGood = lastGood = -1;
+    for (size_t k = 0; k < nz; ++k)
+    {
+      good[k] = lengths[k] > 0.0 && std::abs(lengths[k] - referenceLength) <= tolerance;
+      if (good[k])
+      {
+        firstGood = firstGood < 0 ? static_cast<long>(k) : firstGood;
+        lastGood = static_cast<long>(k);
+      }
+    }
+    if (lastGood <= firstGood)
+    {
+      itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: the sheet could be traced in one slice only; the volume "
+                                               "is too small along the roll axis");
+    }
+  };
+  selectGood(0.05 * referenceLength + 3.0 * voxel);
+  if (method == SheetSurfaceMethodEnum::General)
+  {
+    // Orient every slice like the middle one: the end nearer its first point comes first.
+    std::vector<long> goodSlices;
+    for (long k = firstGood; k <= lastGood; ++k)
+    {
+      if (good[k])
+      {
+        goodSlices.push_back(k);
+      }
+    }
+    const Polyline & reference = traces[goodSlices[goodSlices.size() / 2]];
+    for (long k : goodSlices)
+    {
+      Polyline &   line = traces[k];
+      const size_t n = PolylineSize(line);
+      const double toFirst = std::hypot(line[0] - reference[0], line[1] - reference[1]);
+      const double toLast = std::hypot(line[2 * n - 2] - reference[0], line[2 * n - 1] - reference[1]);
+      if (toLast < toFirst)
+      {
+        for (size_t i = 0; i < n / 2; ++i)
+        {
+          std::swap(line[2 * i], line[2 * (n - 1 - i)]);
+          std::swap(line[2 * i + 1], line[2 * (n - 1 - i) + 1]);
+        }
+      }
+    }
+  }
+
+  // Thickness and the smallest radius of curvature, from the well-traced slices.
+  std::vector<double> thicknesses, radii;
+  size_t              goodCount = 0;
+  for (long k = firstGood; k <= lastGood; ++k)
+  {
+    goodCount += good[k] ? 1 : 0;
+  }
+  const size_t sampleEvery = std::max<size_t>(1, goodCount / 12);
+  size_t       index = 0;
+  for (long k = firstGood; k <= lastGood; ++k)
+  {
+    if (!good[k])
+    {
+      continue;
+    }
+    thicknesses.push_back(area[k] / lengths[k]);
+    if (index++ % sampleEvery != 0)
+    {
+      continue;
+    }
+    const size_t   points = std::max<size_t>(3, static_cast<size_t>(lengths[k] / (0.5 * voxel)));
+    const Polyline even = ResampleEvenly(traces[k], points);
+    const double   step = lengths[k] / static_cast<double>(points - 1);
+    m_Report.SheetThickness = Median(thicknesses);
+    const auto offset =
+      std::max<size_t>(1, static_cast<size_t>(std::ceil(2.0 * std::max(m_Report.SheetThickness, voxel) / step)));
+    for (size_t i = offset; i + offset < points; ++i)
+    {
+      radii.push_back(Circumradius(&even[2 * (i - offset)], &even[2 * i], &even[2 * (i + offset)]));
+    }
+  }
+  m_Report.SheetThickness = Median(thicknesses);
+  m_Report.SheetLength = referenceLength;
+  m_Report.MinimumCurvatureRadius = radii.empty() ? referenceLength : Percentile(radii, 0.05);
+  if (!std::isfinite(m_Report.MinimumCurvatureRadius))
+  {
+    m_Report.MinimumCurvatureRadius = referenceLength;
+  }
+  const double automatic = std::max(
+    voxel, std::sqrt(8.0 * m_Report.MinimumCurvatureRadius * parameters.ChordErrorFraction * m_Report.SheetThickness));
+  const double hs = parameters.SpacingAlongSheet > 0.0 ? parameters.SpacingAlongSheet : automatic;
+  const double hw = parameters.SpacingAlongAxis > 0.0 ? parameters.SpacingAlongAxis : std::max(hs, sz);
+
+  // A slice shorter or longer than the median by a sizeable part of a column would shear
+  // the grid: the columns sit at the same fraction of every slice's length.
+  selectGood(std::min(0.05 * referenceLength, std::max(0.25 * hs, 2.0 * voxel)) + voxel);
+
+  const auto columns = static_cast<size_t>(std::max(2.0, std::ceil(referenceLength / hs) + 1.0));
+  if (columns * (static_cast<size_t>((lastGood - firstGood) * sz / hw) + 2) > (size_t{ 1 } << 31))
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: mesh spacing " << hs << " x " << hw
+                             << " mm gives more than 2^31 points");
+  }
+  // Columns at the same fraction of each slice's traced length; failed slices in between
+  // are interpolated from the nearest good ones.
+  std::vector<Polyline> columnsOf(nz);
+  for (long k = firstGood; k <= lastGood; ++k)
+  {
+    if (good[k])
+    {
+      columnsOf[k] = ResampleEvenly(traces[k], columns);
+    }
+  }
+  for (long k = firstGood; k <= lastGood; ++k)
+  {
+    if (good[k])
+    {
+      continue;
+    }
+    long before = k - 1, after = k + 1;
+    while (!good[before])
+    {
+      --before;
+    }
+    while (!good[after])
+    {
+      ++after;
+    }
+    const double t = static_cast<double>(k - before) / static_cast<double>(after - before);
+    columnsOf[k].resize(2 * columns);
+    for (size_t i = 0; i < 2 * columns; ++i)
+    {
+      columnsOf[k][i] = (1.0 - t) * columnsOf[before][i] + t * columnsOf[after][i];
+    }
+    ++m_Report.InterpolatedSlices;
+  }
+  if (m_Report.InterpolatedSlices > 0)
+  {
+    std::ostringstream text;
+    text << m_Report.InterpolatedSlices << " slice(s) inside the sheet could not be traced and were interpolated";
+    m_Report.Warnings.push_back(text.str());
+  }
+  const double tilt = std::atan(std::hypot(m_Report.AxisSlope[0], m_Report.AxisSlope[1])) * 180.0 / Pi;
+  if (method == SheetSurfaceMethodEnum::Roll && tilt > 2.0)
+  {
+    std::ostringstream text;
+    text << "the roll axis is tilted by " << tilt << " degrees from the slice normal";
+    m_Report.Warnings.push_back(text.str());
+  }
+
+  // Rows: triangular-weighted average of the slices within one row spacing.
+  const double span = static_cast<double>(lastGood - firstGood) * sz;
+  const auto   rows = static_cast<size_t>(std::max(2.0, std::ceil(span / hw) + 1.0));
+  const double rowSpacing = span / static_cast<double>(rows - 1);
+  const double kernel = std::max(rowSpacing, sz);
+  SheetMesh    mesh;
+  mesh.GridRows = static_cast<int32_t>(rows);
+  mesh.GridColumns = static_cast<int32_t>(columns);
+  mesh.Points.resize(3 * rows * columns);
+  mesh.GridIndex.resize(2 * rows * columns);
+  for (size_t r = 0; r < rows; ++r)
+  {
+    const double        z = static_cast<double>(firstGood) * sz + static_cast<double>(r) * rowSpacing;
+    std::vector<double> sum(2 * columns, 0.0);
+    double              weightSum = 0.0;
+    for (long k = firstGood; k <= lastGood; ++k)
+    {
+      const double weight = 1.0 - std::abs(static_cast<double>(k) * sz - z) / kernel;
+      if (weight <= 0.0)
+      {
+        continue;
+      }
+      weightSum += weight;
+      for (size_t i = 0; i < 2 * columns; ++i)
+      {
+        sum[i] += weight * columnsOf[k][i];
+      }
+    }
+    for (size_t c = 0; c < columns; ++c)
+    {
+      const size_t p = r * columns + c;
+      mesh.Points[3 * p] = sum[2 * c] / weightSum;
+      mesh.Points[3 * p + 1] = sum[2 * c + 1] / weightSum;
+      mesh.Points[3 * p + 2] = z;
+      mesh.GridIndex[2 * p] = static_cast<int32_t>(r);
+      mesh.GridIndex[2 * p + 1] = static_cast<int32_t>(c);
+    }
+  }
+  // Triangles with normals dP/dw x dP/ds.
+  mesh.Triangles.reserve(6 * (rows - 1) * (columns - 1));
+  for (size_t r = 0; r + 1 < rows; ++r)
+  {
+    for (size_t c = 0; c + 1 < columns; ++c)
+    {
+      const auto a = static_cast<uint32_t>(r * columns + c);
+      const auto b = a + 1;
+      const auto d = static_cast<uint32_t>(a + columns);
+      const auto e = d + 1;
+      mesh.Triangles.insert(mesh.Triangles.end(), { a, d, b, b, d, e });
+    }
+  }
+  if (method == SheetSurfaceMethodEnum::Roll)
+  {
+    // Make the normals point to the roll axis (the inside face).
+    double agreement = 0.0;
+    for (size_t t = 0; t < mesh.GetNumberOfTriangles(); ++t)
+    {
+      const double * p[3];
+      for (int v = 0; v < 3; ++v)
+      {
+        p[v] = &mesh.Points[3 * mesh.Triangles[3 * t + v]];
+      }
+      const double u[3] = { p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2] };
+      const double v[3] = { p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2] };
+      const double normal[2] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2] };
+      const double toAxis[2] = { m_Report.AxisCentre[0] + m_Report.AxisSlope[0] * p[0][2] - p[0][0],
+                                 m_Report.AxisCentre[1] + m_Report.AxisSlope[1] * p[0][2] - p[0][1] };
+      agreement += normal[0] * toAxis[0] + normal[1] * toAxis[1];
+    }
+    if (agreement < 0.0)
+    {
+      for (size_t t = 0; t < mesh.GetNumberOfTriangles(); ++t)
+      {
+        std::swap(mesh.Triangles[3 * t + 1], mesh.Triangles[3 * t + 2]);
+      }
+    }
+  }
+  m_Report.SpacingAlongSheet = referenceLength / static_cast<double>(columns - 1);
+  m_Report.SpacingAlongAxis = rowSpacing;
+  report(1.0);
+  return mesh;
+}
+} // end namespace itk

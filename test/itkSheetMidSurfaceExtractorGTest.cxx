@@ -1,0 +1,168 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkSheetMidSurfaceExtractor.h"
+#include "vuTestHelpers.h"
+
+#include "gtest/gtest.h"
+
+#include <cmath>
+
+namespace {
+constexpr double Pi = 3.14159265358979323846;
+
+// A rasterised Archimedean spiral mask (no intensities): r = 12 + 6 theta / (2 pi) voxels,
+// 2.5 turns, 3 voxels thick, 1 voxel spacing, 8 slices; centre at (40, 40).
+struct SpiralVolume
+{
+  size_t               Size[3]{ 80, 80, 8 };
+  std::vector<uint8_t> Mask;
+  SpiralVolume()
+    : Mask(Size[0] * Size[1] * Size[2], 0)
+  {
+    for (size_t j = 0; j < Size[1]; ++j)
+    {
+      for (size_t i = 0; i < Size[0]; ++i)
+      {
+        const double x = static_cast<double>(i) - 40.0, y = static_cast<double>(j) - 40.0;
+        const double r = std::hypot(x, y);
+        double       phi = std::atan2(y, x);
+        phi = phi < 0.0 ? phi + 2.0 * Pi : phi;
+        bool inside = false;
+        for (int turn = 0; turn < 3; ++turn)
+        {
+          const double theta = phi + 2.0 * Pi * turn;
+          if (theta <= 2.5 * 2.0 * Pi && std::abs(r - (12.0 + 6.0 * theta / (2.0 * Pi))) <= 1.5)
+          {
+            inside = true;
+          }
+        }
+        for (size_t k = 0; k < Size[2]; ++k)
+        {
+          Mask[(k * Size[1] + j) * Size[0] + i] = inside ? 1 : 0;
+        }
+      }
+    }
+  }
+  itk::SheetVolumeView
+  View() const
+  {
+    itk::SheetVolumeView view;
+    view.Mask = Mask.data();
+    for (int d = 0; d < 3; ++d)
+    {
+      view.Size[d] = Size[d];
+    }
+    return view;
+  }
+};
+} // namespace
+
+TEST(SheetMidSurfaceExtractor, MethodNames)
+{
+  EXPECT_STREQ(itk::ToString(itk::SheetSurfaceMethodEnum::Roll), "roll");
+  EXPECT_EQ(itk::SheetSurfaceMethodFromString("general"), itk::SheetSurfaceMethodEnum::General);
+  EXPECT_EQ(itk::SheetSurfaceMethodFromString("auto"), itk::SheetSurfaceMethodEnum::Auto);
+  EXPECT_THROW(itk::SheetSurfaceMethodFromString("spiral"), itk::ExceptionObject);
+}
+
+TEST(SheetMidSurfaceExtractor, SpiralMaskGivesTheSpiralFromItsInnerEnd)
+{
+  const SpiralVolume            volume;
+  itk::SheetMidSurfaceExtractor extractor;
+  const itk::SheetMesh          mesh = extractor.Extract(volume.View());
+  const auto &                  report = extractor.GetReport();
+  EXPECT_EQ(report.Method, itk::SheetSurfaceMethodEnum::Roll);
+  ASSERT_TRUE(mesh.IsGridStructured());
+  EXPECT_EQ(mesh.GetNumberOfPoints(), static_cast<size_t>(mesh.GridRows) * mesh.GridColumns);
+  EXPECT_EQ(mesh.GetNumberOfTriangles(), 2u * (mesh.GridRows - 1) * (mesh.GridColumns - 1));
+  // Every vertex lies on the spiral (within half a voxel); the end columns lie within 1.5
+  // voxels of the ends of the spiral's mid-line, (12, 0) inside and (-27, 0) outside.
+  for (size_t p = 0; p < mesh.GetNumberOfPoints(); ++p)
+  {
+    const double x = mesh.Points[3 * p] - 40.0, y = mesh.Points[3 * p + 1] - 40.0;
+    const int    column = mesh.GridIndex[2 * p + 1];
+    if (column == 0 || column == mesh.GridColumns - 1)
+    {
+      EXPECT_LT(column == 0 ? std::hypot(x - 12.0, y) : std::hypot(x + 27.0, y), 1.5) << "point " << p;
+      continue;
+    }
+    const double r = std::hypot(x, y);
+    double       phi = std::atan2(y, x);
+    phi = phi < 0.0 ? phi + 2.0 * Pi : phi;
+    double nearest = 1e9;
+    for (int turn = 0; turn < 3; ++turn)
+    {
+      nearest = std::min(nearest, std::abs(r - (12.0 + 6.0 * (phi + 2.0 * Pi * turn) / (2.0 * Pi))));
+    }
+    EXPECT_LT(nearest, 0.5) << "point " << p;
+  }
+  // Arc length of 2.5 turns: integral of sqrt(r^2 + (dr/dtheta)^2), about 306 voxels.
+  EXPECT_NEAR(report.SheetLength, 306.0, 6.0);
+  EXPECT_NEAR(report.SheetThickness, 3.0, 0.5);
+  EXPECT_TRUE(report.Warnings.empty());
+
+  // The general tracer follows the same sheet.
+  itk::SheetMidSurfaceParameters parameters;
+  parameters.Method = itk::SheetSurfaceMethodEnum::General;
+  extractor.SetParameters(parameters);
+  extractor.Extract(volume.View());
+  EXPECT_NEAR(extractor.GetReport().SheetLength, 306.0, 10.0);
+
+  // User spacing.
+  parameters.Method = itk::SheetSurfaceMethodEnum::Roll;
+  parameters.SpacingAlongSheet = 10.0;
+  parameters.SpacingAlongAxis = 7.0;
+  extractor.SetParameters(parameters);
+  const itk::SheetMesh coarse = extractor.Extract(volume.View());
+  EXPECT_EQ(coarse.GridRows, 2);
+  EXPECT_NEAR(extractor.GetReport().SpacingAlongSheet, 10.0, 0.5);
+}
+
+TEST(SheetMidSurfaceExtractor, ProgressCallbackAborts)
+{
+  const SpiralVolume            volume;
+  itk::SheetMidSurfaceExtractor extractor;
+  double                        last = -1.0;
+  extractor.SetProgressCallback([&last](double fraction) {
+    last = fraction;
+    return false;
+  });
+  EXPECT_THROW(extractor.Extract(volume.View()), itk::ExceptionObject);
+  EXPECT_GE(last, 0.0);
+}
+
+TEST(SheetMidSurfaceExtractor, BadInputThrows)
+{
+  itk::SheetMidSurfaceExtractor extractor;
+  itk::SheetVolumeView          view;
+  EXPECT_THROW(extractor.Extract(view), itk::ExceptionObject); // no mask
+  SpiralVolume volume;
+  std::fill(volume.Mask.begin(), volume.Mask.end(), 0);
+  EXPECT_THROW(extractor.Extract(volume.View()), itk::ExceptionObject); // empty
+  const SpiralVolume good;
+  view = good.View();
+  view.Spacing[1] = 2.0;
+  EXPECT_THROW(extractor.Extract(view), itk::ExceptionObject); // non-square voxels
+  view = good.View();
+  view.Size[2] = 1;
+  EXPECT_THROW(extractor.Extract(view), itk::ExceptionObject); // too small
+  itk::SheetMidSurfaceParameters parameters;
+  parameters.ChordErrorFraction = 2.0;
+  extractor.SetParameters(parameters);
+  EXPECT_THROW(extractor.Extract(good.View()), itk::ExceptionObject);
+}

@@ -1,0 +1,357 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkFlatteningDistortionCalculator.h"
+#include "itkMassSpringSheetFlattener.h"
+#include "itkMeshFileWriter.h"
+#include "itkSheetMeshErrorCalculator.h"
+#include "itkSheetMidSurfaceMeshFilter.h"
+#include "itkSheetPhantomSource.h"
+#include "itkSheetSegmentationImageFilter.h"
+#include "vuTestHelpers.h"
+
+#include "gtest/gtest.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+namespace {
+using VolumeType = itk::Image<float, 3>;
+using MaskType = itk::Image<unsigned char, 3>;
+using MeshType = itk::Mesh<float, 3>;
+using SegmentationType = itk::SheetSegmentationImageFilter<VolumeType, MaskType>;
+using SurfaceType = itk::SheetMidSurfaceMeshFilter<MaskType, MeshType>;
+
+struct PhantomResult
+{
+  itk::SheetMesh              Mesh;
+  itk::SheetPhantomGeometry   Geometry;
+  double                      Voxel{ 0.0 };
+  double                      Threshold{ 0.0 };
+  itk::SheetSurfaceMethodEnum Method{ itk::SheetSurfaceMethodEnum::Auto };
+  size_t                      Warnings{ 0 };
+  std::string                 WarningText;
+};
+
+// Segments and meshes a preset phantom with default parameters, as the tool does.
+PhantomResult
+SegmentPhantom(const std::string & preset, double tilt = 0.0)
+{
+  auto source = itk::SheetPhantomSource::New();
+  source->ApplyPreset(preset);
+  source->SetTiltAngle(tilt);
+  auto segmentation = SegmentationType::New();
+  segmentation->SetInput(source->GetOutput());
+  auto surface = SurfaceType::New();
+  surface->SetInput(segmentation->GetOutput());
+  surface->SetIntensityImage(source->GetOutput());
+  surface->Update();
+  PhantomResult result;
+  result.Mesh = surface->GetSheetMesh();
+  result.Geometry = source->GetGeometry();
+  result.Voxel = std::min(source->GetVoxelSize(), source->GetSliceSpacing());
+  result.Threshold = segmentation->GetThreshold();
+  result.Method = surface->GetReport().Method;
+  result.Warnings = surface->GetWarnings().size();
+  result.WarningText = surface->GetWarnings().empty() ? std::string() : surface->GetWarnings().front();
+  for (const std::string & warning : surface->GetWarnings())
+  {
+    std::printf("[ warning  ] %s: %s\n", preset.c_str(), warning.c_str());
+  }
+  const std::string directory = std::string(VU_BINARY_DIR) + "/Testing/Segmentation";
+  std::filesystem::create_directories(directory);
+  auto writer = itk::MeshFileWriter<MeshType>::New();
+  writer->SetInput(surface->GetOutput());
+  writer->SetFileName(directory + "/" + preset + ".obj");
+  writer->Update();
+  return result;
+}
+
+// Number of connected pieces of a mesh (through shared vertices).
+size_t
+CountConnectedPieces(const itk::SheetMesh & mesh)
+{
+  std::vector<uint32_t> parent(mesh.GetNumberOfPoints());
+  for (uint32_t i = 0; i < parent.size(); ++i)
+  {
+    parent[i] = i;
+  }
+  auto find = [&](uint32_t i) {
+    while (parent[i] != i)
+    {
+      i = parent[i] = parent[parent[i]];
+    }
+    return i;
+  };
+  for (size_t t = 0; t < mesh.GetNumberOfTriangles(); ++t)
+  {
+    parent[find(mesh.Triangles[3 * t + 1])] = find(mesh.Triangles[3 * t]);
+    parent[find(mesh.Triangles[3 * t + 2])] = find(mesh.Triangles[3 * t]);
+  }
+  size_t pieces = 0;
+  for (uint32_t i = 0; i < parent.size(); ++i)
+  {
+    pieces += find(i) == i ? 1 : 0;
+  }
+  return pieces;
+}
+
+struct Figures
+{
+  double MeanDistance, MaximumDistance, Coverage;
+  size_t LayerJumps;
+};
+
+Figures
+Measure(const std::string & preset, const PhantomResult & result)
+{
+  auto calculator = itk::SheetMeshErrorCalculator::New();
+  calculator->SetGeometry(result.Geometry);
+  calculator->SetMesh(result.Mesh);
+  calculator->SetVoxelSize(result.Voxel);
+  calculator->Compute();
+  const Figures figures{ calculator->GetMeanVertexDistance(),
+                         calculator->GetMaximumVertexDistance(),
+                         calculator->GetCoverage(),
+                         calculator->GetNumberOfLayerJumps() };
+  std::printf("[ figures  ] %s: method %s, threshold %.0f, %zu points (%d x %d grid), %zu triangles, "
+              "vertex distance mean %.3f max %.3f voxels, coverage %.2f %%, layer jumps %zu, %zu warning(s)\n",
+              preset.c_str(),
+              itk::ToString(result.Method),
+              result.Threshold,
+              result.Mesh.GetNumberOfPoints(),
+              result.Mesh.GridRows,
+              result.Mesh.GridColumns,
+              result.Mesh.GetNumberOfTriangles(),
+              figures.MeanDistance,
+              figures.MaximumDistance,
+              100.0 * figures.Coverage,
+              figures.LayerJumps,
+              result.Warnings);
+  return figures;
+}
+} // namespace
+
+TEST(SheetMidSurfaceMeshFilter, BasicObjectMethods)
+{
+  auto filter = SurfaceType::New();
+  VU_EXPECT_ITK_MACROS(ITK_EXERCISE_BASIC_OBJECT_METHODS(filter, SheetMidSurfaceMeshFilter, ImageToMeshFilter));
+  VU_EXPECT_ITK_MACROS(
+    ITK_TEST_SET_GET_VALUE(0.3, (filter->SetSpacingAlongSheet(0.3), filter->GetSpacingAlongSheet())));
+  VU_EXPECT_ITK_MACROS(ITK_TEST_SET_GET_VALUE(0.4, (filter->SetSpacingAlongAxis(0.4), filter->GetSpacingAlongAxis())));
+  VU_EXPECT_ITK_MACROS(
+    ITK_TEST_SET_GET_VALUE(0.2, (filter->SetChordErrorFraction(0.2), filter->GetChordErrorFraction())));
+  filter->SetMethod(itk::SheetSurfaceMethodEnum::General);
+  EXPECT_EQ(filter->GetMethod(), itk::SheetSurfaceMethodEnum::General);
+}
+
+TEST(SheetMidSurfaceMeshFilter, StandardRollIsAccurateAndFlattens)
+{
+  const PhantomResult result = SegmentPhantom("standard");
+  const Figures       figures = Measure("standard", result);
+  EXPECT_EQ(result.Method, itk::SheetSurfaceMethodEnum::Roll);
+  EXPECT_LE(figures.MeanDistance, 0.5);
+  EXPECT_GE(figures.Coverage, 0.97);
+  EXPECT_EQ(figures.LayerJumps, 0u);
+  EXPECT_EQ(CountConnectedPieces(result.Mesh), 1u);
+  ASSERT_TRUE(result.Mesh.IsGridStructured());
+
+  // Normals point to the roll axis, like the phantom's SurfaceNormal (the inked face).
+  size_t agreeing = 0;
+  for (size_t t = 0; t < result.Mesh.GetNumberOfTriangles(); ++t)
+  {
+    const double * p[3];
+    for (int v = 0; v < 3; ++v)
+    {
+      p[v] = &result.Mesh.Points[3 * result.Mesh.Triangles[3 * t + v]];
+    }
+    const double u[3] = { p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2] };
+    const double v[3] = { p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2] };
+    const double n[3] = { u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0] };
+    double       s, w, d, truth[3];
+    result.Geometry.Project(p[0], s, w, d);
+    result.Geometry.SurfaceNormal(s, w, truth);
+    agreeing += n[0] * truth[0] + n[1] * truth[1] + n[2] * truth[2] > 0.0 ? 1 : 0;
+  }
+  EXPECT_EQ(agreeing, result.Mesh.GetNumberOfTriangles());
+
+  // Columns run from the inner end outwards: column 0 projects near s = 0.
+  double s0, w0, d0;
+  result.Geometry.Project(&result.Mesh.Points[0], s0, w0, d0);
+  EXPECT_LT(s0, 0.1 * result.Geometry.GetSheetLength());
+
+  itk::MassSpringSheetFlattener flattener;
+  const itk::SheetMesh          flat = flattener.Flatten(result.Mesh);
+  auto                          distortion = itk::FlatteningDistortionCalculator::New();
+  distortion->SetSurfaceMesh(result.Mesh);
+  distortion->SetFlatMesh(flat);
+  distortion->Compute();
+  std::printf("[ figures  ] standard flattened: edge strain mean %.5f p95 %.5f max %.5f, flipped %lu\n",
+              distortion->GetEdgeStrainMean(),
+              distortion->GetEdgeStrainP95(),
+              distortion->GetEdgeStrainMax(),
+              static_cast<unsigned long>(distortion->GetNumberOfFlippedTriangles()));
+  EXPECT_LT(distortion->GetEdgeStrainP95(), 0.01);
+}
+
+TEST(SheetMidSurfaceMeshFilter, PapyrusMicroCTIsAccurate)
+{
+  const PhantomResult result = SegmentPhantom("papyrus-microct");
+  const Figures       figures = Measure("papyrus-microct", result);
+  EXPECT_LE(figures.MeanDistance, 0.5);
+  EXPECT_GE(figures.Coverage, 0.97);
+  EXPECT_EQ(figures.LayerJumps, 0u);
+  EXPECT_EQ(CountConnectedPieces(result.Mesh), 1u);
+}
+
+TEST(SheetMidSurfaceMeshFilter, TightAndCanvasAreCoveredWithoutLayerJumps)
+{
+  for (const char * preset : { "tight", "canvas-medical" })
+  {
+    const PhantomResult result = SegmentPhantom(preset);
+    const Figures       figures = Measure(preset, result);
+    EXPECT_GE(figures.Coverage, 0.90) << preset;
+    EXPECT_EQ(figures.LayerJumps, 0u) << preset;
+    EXPECT_EQ(CountConnectedPieces(result.Mesh), 1u) << preset;
+  }
+}
+
+TEST(SheetMidSurfaceMeshFilter, SquashedAndFoldedGiveOneOpenMesh)
+{
+  for (const char * preset : { "squashed", "folded" })
+  {
+    const PhantomResult result = SegmentPhantom(preset);
+    Measure(preset, result);
+    EXPECT_EQ(CountConnectedPieces(result.Mesh), 1u) << preset;
+    EXPECT_TRUE(result.Mesh.IsGridStructured()) << preset;
+  }
+}
+
+namespace {
+MaskType::Pointer
+MakeMask(unsigned size, unsigned depth)
+{
+  auto                 mask = MaskType::New();
+  MaskType::RegionType region;
+  region.SetSize({ { size, size, depth } });
+  mask->SetRegions(region);
+  mask->Allocate();
+  mask->FillBuffer(0);
+  return mask;
+}
+
+// A flat sheet, three voxels thick, across the slices at rows y0..y0+2, columns x0..x1.
+void
+AddFlatSheet(MaskType * mask, long x0, long x1, long y0)
+{
+  const auto size = mask->GetLargestPossibleRegion().GetSize();
+  for (long z = 0; z < static_cast<long>(size[2]); ++z)
+  {
+    for (long y = y0; y < y0 + 3; ++y)
+    {
+      for (long x = x0; x <= x1; ++x)
+      {
+        mask->SetPixel({ { x, y, z } }, 1);
+      }
+    }
+  }
+}
+} // namespace
+
+TEST(SheetMidSurfaceMeshFilter, FlatSheetWithAStrayPieceMeshesTheSheetAndWarns)
+{
+  auto mask = MakeMask(40, 12);
+  mask->SetSpacing(0.5);
+  AddFlatSheet(mask, 4, 35, 10);
+  // A small separate fragment.
+  mask->SetPixel({ { 30, 30, 5 } }, 1);
+  mask->SetPixel({ { 30, 31, 5 } }, 1);
+  auto filter = SurfaceType::New();
+  filter->SetInput(mask);
+  filter->SetMethod(itk::SheetSurfaceMethodEnum::General);
+  filter->Update();
+  const itk::SheetMesh & mesh = filter->GetSheetMesh();
+  ASSERT_EQ(filter->GetWarnings().size(), 1u);
+  EXPECT_NE(filter->GetWarnings()[0].find("2 disconnected pieces"), std::string::npos) << filter->GetWarnings()[0];
+  EXPECT_EQ(CountConnectedPieces(mesh), 1u);
+  ASSERT_TRUE(mesh.IsGridStructured());
+  // The mid-surface of voxel rows 10..12 is y = 11 voxels = 5.5 mm; x spans the sheet.
+  double minimumX = 1e9, maximumX = -1e9;
+  for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    EXPECT_NEAR(mesh.Points[3 * i + 1], 5.5, 0.05);
+    minimumX = std::min(minimumX, mesh.Points[3 * i]);
+    maximumX = std::max(maximumX, mesh.Points[3 * i]);
+  }
+  EXPECT_LT(minimumX, 2.0 + 0.5);
+  EXPECT_GT(maximumX, 17.5 - 0.5);
+  EXPECT_EQ(filter->GetOutput()->GetNumberOfPoints(), mesh.GetNumberOfPoints());
+  EXPECT_EQ(filter->GetOutput()->GetNumberOfCells(), mesh.GetNumberOfTriangles());
+  EXPECT_EQ(filter->GetReport().Method, itk::SheetSurfaceMethodEnum::General);
+
+  // User spacing: about 2 mm along the sheet.
+  filter->SetSpacingAlongSheet(2.0);
+  filter->SetSpacingAlongAxis(1.0);
+  filter->Update();
+  EXPECT_NEAR(filter->GetReport().SpacingAlongSheet, 2.0, 0.3);
+  EXPECT_NEAR(filter->GetReport().SpacingAlongAxis, 1.0, 0.15);
+}
+
+TEST(SheetMidSurfaceMeshFilter, BadInputThrows)
+{
+  auto filter = SurfaceType::New();
+  filter->SetInput(MakeMask(20, 10));
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject); // empty mask
+
+  auto tiny = MakeMask(2, 2);
+  tiny->FillBuffer(1);
+  filter->SetInput(tiny);
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject); // too small
+
+  auto mask = MakeMask(40, 12);
+  AddFlatSheet(mask, 4, 35, 10);
+  filter->SetInput(mask);
+  auto                   intensity = VolumeType::New();
+  VolumeType::RegionType region;
+  region.SetSize({ { 10, 10, 10 } });
+  intensity->SetRegions(region);
+  intensity->Allocate();
+  filter->SetIntensityImage(intensity);
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject); // intensity of another size
+  filter->SetIntensityImage(nullptr);
+  filter->SetChordErrorFraction(0.0);
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject); // bad parameter
+
+  auto single = MakeMask(40, 1);
+  AddFlatSheet(single, 4, 35, 10);
+  filter->SetChordErrorFraction(0.1);
+  filter->SetInput(single);
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject); // one slice only
+}
+
+TEST(SheetMidSurfaceMeshFilter, TiltedRollIsResampledAlongItsAxis)
+{
+  const PhantomResult result = SegmentPhantom("standard", 20.0);
+  const Figures       figures = Measure("standard tilted 20 degrees", result);
+  EXPECT_NE(result.WarningText.find("resampled along the roll axis"), std::string::npos) << result.WarningText;
+  EXPECT_LE(figures.MeanDistance, 0.5);
+  EXPECT_GE(figures.Coverage, 0.97);
+  EXPECT_EQ(figures.LayerJumps, 0u);
+  EXPECT_EQ(CountConnectedPieces(result.Mesh), 1u);
+}

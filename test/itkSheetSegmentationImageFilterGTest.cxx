@@ -1,0 +1,181 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkConstantPadImageFilter.h"
+#include "itkImageRegionConstIteratorWithIndex.h"
+#include "itkSheetPhantomSource.h"
+#include "itkSheetSegmentationImageFilter.h"
+#include "vuTestHelpers.h"
+
+#include "gtest/gtest.h"
+
+namespace {
+using VolumeType = itk::Image<float, 3>;
+using MaskType = itk::Image<unsigned char, 3>;
+using FilterType = itk::SheetSegmentationImageFilter<VolumeType, MaskType>;
+
+VolumeType::Pointer
+MakeStandardPhantom(itk::SheetPhantomGeometry * geometry = nullptr)
+{
+  auto source = itk::SheetPhantomSource::New();
+  source->ApplyPreset("standard");
+  source->Update();
+  if (geometry != nullptr)
+  {
+    *geometry = source->GetGeometry();
+  }
+  return source->GetOutput();
+}
+
+VolumeType::Pointer
+MakeConstantVolume(float value)
+{
+  auto                   volume = VolumeType::New();
+  VolumeType::RegionType region;
+  region.SetSize({ { 20, 20, 20 } });
+  volume->SetRegions(region);
+  volume->Allocate();
+  volume->FillBuffer(value);
+  return volume;
+}
+} // namespace
+
+TEST(SheetSegmentationImageFilter, BasicObjectMethods)
+{
+  auto filter = FilterType::New();
+  VU_EXPECT_ITK_MACROS(ITK_EXERCISE_BASIC_OBJECT_METHODS(filter, SheetSegmentationImageFilter, ImageToImageFilter));
+  VU_EXPECT_ITK_MACROS(ITK_TEST_SET_GET_BOOLEAN(filter, AutomaticThreshold, false));
+  VU_EXPECT_ITK_MACROS(ITK_TEST_SET_GET_VALUE(-300.0, (filter->SetThreshold(-300.0), filter->GetThreshold())));
+  VU_EXPECT_ITK_MACROS(
+    ITK_TEST_SET_GET_VALUE(128u, (filter->SetNumberOfHistogramBins(128), filter->GetNumberOfHistogramBins())));
+  VU_EXPECT_ITK_MACROS(
+    ITK_TEST_SET_GET_VALUE(50u, (filter->SetMinimumComponentSize(50), filter->GetMinimumComponentSize())));
+  VU_EXPECT_ITK_MACROS(ITK_TEST_SET_GET_VALUE(2u, (filter->SetClosingRadius(2), filter->GetClosingRadius())));
+  VU_EXPECT_ITK_MACROS(ITK_TEST_SET_GET_VALUE(255, (filter->SetForegroundValue(255), filter->GetForegroundValue())));
+}
+
+TEST(SheetSegmentationImageFilter, StandardPhantomMaskLiesOnTheSheet)
+{
+  itk::SheetPhantomGeometry geometry;
+  const auto                volume = MakeStandardPhantom(&geometry);
+  auto                      filter = FilterType::New();
+  filter->SetInput(volume);
+  filter->Update();
+  // Between air (-1000) and sheet (+400) HU; the sheet is one piece.
+  EXPECT_GT(filter->GetThreshold(), -800.0);
+  EXPECT_LT(filter->GetThreshold(), 0.0);
+  EXPECT_EQ(filter->GetNumberOfComponents(), 1u);
+  size_t     inMask = 0, nearSheet = 0;
+  const auto region = filter->GetOutput()->GetLargestPossibleRegion();
+  for (itk::ImageRegionConstIteratorWithIndex<MaskType> it(filter->GetOutput(), region); !it.IsAtEnd(); ++it)
+  {
+    if (it.Get() == 0)
+    {
+      continue;
+    }
+    EXPECT_EQ(it.Get(), 1);
+    ++inMask;
+    VolumeType::PointType point;
+    volume->TransformIndexToPhysicalPoint(it.GetIndex(), point);
+    const double p[3] = { point[0], point[1], point[2] };
+    double       s, w, d;
+    geometry.Project(p, s, w, d);
+    nearSheet += std::abs(d) <= 0.5 * geometry.GetSheetThickness() + 0.1 ? 1 : 0;
+  }
+  EXPECT_EQ(filter->GetLargestComponentSize(), inMask);
+  EXPECT_GT(inMask, 10000u);
+  EXPECT_GE(static_cast<double>(nearSheet), 0.999 * static_cast<double>(inMask));
+
+  // A wide air border does not move the automatic threshold: it is computed on the object.
+  auto pad = itk::ConstantPadImageFilter<VolumeType, VolumeType>::New();
+  pad->SetInput(volume);
+  pad->SetPadBound({ { 60, 60, 20 } });
+  pad->SetConstant(-1000.0f);
+  auto padded = FilterType::New();
+  padded->SetInput(pad->GetOutput());
+  padded->Update();
+  EXPECT_NEAR(padded->GetThreshold(), filter->GetThreshold(), 30.0);
+
+  // A fixed threshold is used as given; closing only adds voxels.
+  auto fixed = FilterType::New();
+  fixed->SetInput(volume);
+  fixed->AutomaticThresholdOff();
+  fixed->SetThreshold(-200.0);
+  fixed->SetClosingRadius(1);
+  fixed->Update();
+  EXPECT_EQ(fixed->GetThreshold(), -200.0);
+  size_t originalOutsideClosed = 0;
+  auto   plain = FilterType::New();
+  plain->SetInput(volume);
+  plain->AutomaticThresholdOff();
+  plain->SetThreshold(-200.0);
+  plain->Update();
+  itk::ImageRegionConstIteratorWithIndex<MaskType> a(fixed->GetOutput(), region), b(plain->GetOutput(), region);
+  size_t                                           added = 0;
+  for (; !a.IsAtEnd(); ++a, ++b)
+  {
+    originalOutsideClosed += (b.Get() != 0 && a.Get() == 0) ? 1 : 0;
+    added += (a.Get() != 0 && b.Get() == 0) ? 1 : 0;
+  }
+  EXPECT_EQ(originalOutsideClosed, 0u);
+  EXPECT_GT(added, 0u);
+}
+
+TEST(SheetSegmentationImageFilter, NoiseSpecksAreRemoved)
+{
+  auto volume = MakeConstantVolume(-1000.0f);
+  // A 10x10x3 slab and three isolated bright voxels.
+  for (long z = 8; z < 11; ++z)
+  {
+    for (long y = 5; y < 15; ++y)
+    {
+      for (long x = 5; x < 15; ++x)
+      {
+        volume->SetPixel({ { x, y, z } }, 400.0f);
+      }
+    }
+  }
+  volume->SetPixel({ { 1, 1, 1 } }, 400.0f);
+  volume->SetPixel({ { 18, 2, 3 } }, 400.0f);
+  volume->SetPixel({ { 2, 17, 17 } }, 400.0f);
+  auto filter = FilterType::New();
+  filter->SetInput(volume);
+  filter->SetMinimumComponentSize(10);
+  filter->Update();
+  EXPECT_EQ(filter->GetNumberOfComponents(), 1u);
+  EXPECT_EQ(filter->GetLargestComponentSize(), 300u);
+  EXPECT_EQ(filter->GetOutput()->GetPixel({ { 1, 1, 1 } }), 0);
+  EXPECT_EQ(filter->GetOutput()->GetPixel({ { 10, 10, 9 } }), 1);
+
+  filter->SetMinimumComponentSize(1000);
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject);
+}
+
+TEST(SheetSegmentationImageFilter, BadInputThrows)
+{
+  auto filter = FilterType::New();
+  filter->SetInput(MakeConstantVolume(-1000.0f));
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject);
+
+  auto volume = MakeConstantVolume(-1000.0f);
+  volume->SetPixel({ { 10, 10, 10 } }, 400.0f);
+  auto high = FilterType::New();
+  high->SetInput(volume);
+  high->AutomaticThresholdOff();
+  high->SetThreshold(5000.0);
+  EXPECT_THROW(high->Update(), itk::ExceptionObject);
+}
