@@ -45,7 +45,7 @@ namespace itk {
  * (0: automatic), HangingStrain (0.01), Damping (-1: automatic), SpringDamping (0),
  * Restitution (0.1, in [0, 1]), LockedEdge (OuterEdge), LockedParticles,
  * MaximumStepsPerPhase (3000), KineticEnergyTolerance (1e-9), ResidualForceTolerance
- * (1e-3), PlanarityTolerance (0.05), RelaxationIterations (300), RelaxationTolerance (1e-5), CoarseningFactor
+ * (1e-3), PlanarityTolerance (0.25), RelaxationIterations (300), RelaxationTolerance (1e-5), CoarseningFactor
  * (0: automatic), CoarseParticles (3000).
  *
  * Events: an IterationEvent after every simulation step (observers may read
@@ -194,7 +194,7 @@ private:
   unsigned int          m_MaximumStepsPerPhase{ 3000 };
   double                m_KineticEnergyTolerance{ 1e-9 };
   double                m_ResidualForceTolerance{ 1e-3 };
-  double                m_PlanarityTolerance{ 0.05 };
+  double                m_PlanarityTolerance{ 0.25 };
   unsigned int          m_RelaxationIterations{ 300 };
   double                m_RelaxationTolerance{ 1e-5 };
   unsigned int          m_CoarseningFactor{ 0 };

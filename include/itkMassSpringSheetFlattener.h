@@ -93,7 +93,7 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningParameters
   double ResidualForceTolerance{ 1e-3 };
   /** The unroll phase is over only when the sheet hangs in a plane: RMS distance from its
    * best-fitting plane below this fraction of the mean spring length. */
-  double PlanarityTolerance{ 0.05 };
+  double PlanarityTolerance{ 0.25 };
   /** Quasi-static relaxation on the plane after the flatten phase: iteration limit and
    * tolerance on the relative residual force. */
   unsigned int RelaxationIterations{ 300 };
@@ -153,7 +153,8 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
  *    solver (in-plane spring projection) until the residual force is below
  *    RelaxationTolerance.
  * The flat mesh (same points, same triangles, z = 0) is expressed in the plane: x along
- * the sheet's longest extent, triangles counter-clockwise seen from +z (the side the 3D
+ * the sheet's longest extent (on grid meshes pointing towards increasing columns, i.e.
+ * away from the sheet's start), triangles counter-clockwise seen from +z (the side the 3D
  * triangles' normals face), the bounding box starting at (0, 0).
  *
  * Modelling no more than the scene needs: on grid meshes with more than CoarseParticles

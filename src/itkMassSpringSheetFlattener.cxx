@@ -361,8 +361,8 @@ ToPlane(const std::vector<double> & x, const Vec3 & origin, const Vec3 & u, cons
   return planar;
 }
 
-// Final frame of a flat mesh: x along the longest extent, triangles counter-clockwise,
-// bounding box from (0, 0).
+// Final frame of a flat mesh: x along the longest extent (grid meshes: in the direction
+// of increasing column), triangles counter-clockwise, bounding box from (0, 0).
 void
 NormaliseFlatFrame(SheetMesh & flat)
 {
@@ -375,6 +375,19 @@ NormaliseFlatFrame(SheetMesh & flat)
     u = Vec3::UnitX();
   }
   u.normalize();
+  if (flat.IsGridStructured())
+  {
+    // Grid columns run along the sheet from its inner end: let them run along +x.
+    double correlation = 0.0;
+    for (size_t i = 0; i < flat.GetNumberOfPoints(); ++i)
+    {
+      correlation += (PointOf(flat.Points, i) - centroid).dot(u) * flat.GridIndex[2 * i + 1];
+    }
+    if (correlation < 0.0)
+    {
+      u = -u;
+    }
+  }
   Vec3                v(-u.y(), u.x(), 0.0);
   std::vector<double> p = ToPlane(flat.Points, centroid, u, v);
   double              signedArea = 0.0;

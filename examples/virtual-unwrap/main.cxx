@@ -25,6 +25,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <regex>
 
 namespace vu {
 void
@@ -71,7 +72,9 @@ OneLine(std::string text)
       c = ' ';
     }
   }
-  return text;
+  // itkExceptionMacro prefixes "ITK ERROR: Class(0x...): ", which tells a user nothing.
+  static const std::regex prefix("^ITK ERROR: [^(]*\\(0x[0-9a-fA-F]+\\): ");
+  return std::regex_replace(text, prefix, "");
 }
 } // namespace
 
@@ -84,6 +87,7 @@ main(int argc, char * argv[])
   app.set_version_flag("--version", "virtual-unwrap 0.1.0 (VirtualUnwrapping ITK module)");
   app.require_subcommand(1);
   app.get_formatter()->column_width(42);
+  vu::RegisterUnwrapCommand(app);
   vu::RegisterDistortionCommand(app);
   vu::RegisterFlattenCommand(app);
   vu::RegisterPhantomCommand(app);

@@ -44,6 +44,8 @@ void
 RegisterInfoCommand(CLI::App & app);
 void
 RegisterSegmentCommand(CLI::App & app);
+void
+RegisterUnwrapCommand(CLI::App & app);
 
 /** Writes text to path atomically: to a temporary name beside it, then renamed, so a
  * failure never leaves a half-written file. */

@@ -1,0 +1,613 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// virtual-unwrap unwrap INPUT -o OUTDIR: the module's main job, from a CT scan to a flat,
+// readable image: read, segment, mesh the sheet's mid-surface, unroll and flatten it by
+// mass-spring simulation, render the layered texture, report.
+#include "vuCommands.h"
+#include "vuProgress.h"
+#include "vuReaderOptions.h"
+#include "vuSheetMeshIO.h"
+#include "vuSimulationOptions.h"
+
+#include "itkCTVolumeReader.h"
+#include "itkFlattenedTextureImageFilter.h"
+#include "itkFlipImageFilter.h"
+#include "itkImageFileReader.h"
+#include "itkImageFileWriter.h"
+#include "itkLayeredTextureMeshFilter.h"
+#include "itkMassSpringSheetFlattener.h"
+#include "itkRescaleIntensityImageFilter.h"
+#include "itkSheetMeshAdaptor.h"
+#include "itkSheetMidSurfaceMeshFilter.h"
+#include "itkSheetSegmentationImageFilter.h"
+#include "itkTextLegibility.h"
+#include "itkTextureFidelityCalculator.h"
+#include "itkTextureLayers.h"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+namespace vu {
+namespace {
+namespace fs = std::filesystem;
+using VolumeType = itk::Image<float, 3>;
+using MaskType = itk::Image<unsigned char, 3>;
+using MeshType = itk::Mesh<float, 3>;
+using TextureType = itk::Image<float, 2>;
+using TextureMaskType = itk::Image<unsigned char, 2>;
+using LayerStackType = itk::Image<float, 3>;
+
+struct UnwrapOptions
+{
+  std::string       Input;
+  std::string       Output;
+  ReaderOptions     Reader;
+  std::string       Threshold{ "auto" };
+  double            MeshSpacing{ 0.0 };
+  std::string       Method{ "auto" };
+  unsigned int      Layers{ 5 };
+  double            LayerSpacing{ 0.0 };
+  std::string       Side{ "both" };
+  std::string       Filter{ "max" };
+  double            Focus{ 0.0 };
+  double            PixelSize{ 0.0 };
+  SimulationOptions Simulation;
+  std::string       GroundTruth;
+  bool              Quiet{ false };
+  bool              JsonLog{ false };
+};
+
+double
+PeakMemoryMiB()
+{
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;
+}
+
+itk::TextureLayersEnums::Filter
+FilterFromName(const std::string & name)
+{
+  using F = itk::TextureLayersEnums::Filter;
+  if (name == "mean")
+    return F::Mean;
+  if (name == "gaussian")
+    return F::GaussianMean;
+  if (name == "max")
+    return F::Max;
+  if (name == "min")
+    return F::Min;
+  if (name == "median")
+    return F::Median;
+  return F::SingleLayer;
+}
+
+itk::TextureLayersEnums::Side
+SideFromName(const std::string & name)
+{
+  using S = itk::TextureLayersEnums::Side;
+  return name == "positive" ? S::Positive : (name == "negative" ? S::Negative : S::Both);
+}
+
+// Flat y grows upwards when the sheet is seen from the side its normals face; image rows
+// grow downwards. Flipping rows shows the sheet as seen from that side, not mirrored.
+template <typename TImage>
+typename TImage::Pointer
+FlipRows(const TImage * image)
+{
+  auto flip = itk::FlipImageFilter<TImage>::New();
+  flip->SetInput(image);
+  typename itk::FlipImageFilter<TImage>::FlipAxesArrayType axes;
+  axes.Fill(false);
+  axes[1] = true;
+  flip->SetFlipAxes(axes);
+  flip->FlipAboutOriginOff();
+  flip->Update();
+  typename TImage::Pointer result = flip->GetOutput();
+  result->DisconnectPipeline();
+  return result;
+}
+
+template <typename TImage>
+void
+WriteImageFile(const TImage * image, const fs::path & path)
+{
+  auto writer = itk::ImageFileWriter<TImage>::New();
+  writer->SetInput(image);
+  writer->SetFileName(path.string());
+  writer->Update();
+}
+
+// 8-bit view of the texture: contrast stretched between the 0.5th and 99.5th percentiles of
+// the sheet's pixels; off the sheet black.
+itk::Image<unsigned char, 2>::Pointer
+EightBit(const TextureType * texture)
+{
+  std::vector<float> values;
+  for (itk::ImageRegionConstIterator<TextureType> it(texture, texture->GetBufferedRegion()); !it.IsAtEnd(); ++it)
+  {
+    if (std::isfinite(it.Get()))
+    {
+      values.push_back(it.Get());
+    }
+  }
+  if (values.empty())
+  {
+    throw UsageError("the texture has no pixel on the sheet");
+  }
+  auto percentile = [&values](double q) {
+    const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * values.size()));
+    std::nth_element(values.begin(), values.begin() + k, values.end());
+    return values[k];
+  };
+  const float lo = percentile(0.005), hi = std::max(percentile(0.995), lo + 1e-6f);
+  auto        out = itk::Image<unsigned char, 2>::New();
+  out->CopyInformation(texture);
+  out->SetRegions(texture->GetBufferedRegion());
+  out->Allocate();
+  itk::ImageRegionConstIterator<TextureType>             in(texture, texture->GetBufferedRegion());
+  itk::ImageRegionIterator<itk::Image<unsigned char, 2>> o(out, out->GetBufferedRegion());
+  for (; !in.IsAtEnd(); ++in, ++o)
+  {
+    const float v = in.Get();
+    o.Set(std::isfinite(v) ? static_cast<unsigned char>(std::clamp((v - lo) / (hi - lo), 0.0f, 1.0f) * 255.0f + 0.5f)
+                           : 0);
+  }
+  return out;
+}
+
+// Preview: a slice across the roll axis with the mesh's cross-section in red, beside the
+// flat texture, on one RGB canvas.
+void
+WritePreview(const VolumeType *                   volume,
+             const itk::SheetMesh &               surface,
+             const itk::Image<unsigned char, 2> * texture8,
+             const fs::path &                     path)
+{
+  using RGB = itk::RGBPixel<unsigned char>;
+  using Canvas = itk::Image<RGB, 2>;
+  const auto size = volume->GetLargestPossibleRegion().GetSize();
+  const auto index0 = volume->GetLargestPossibleRegion().GetIndex();
+  // The slice through a point in the middle of the mesh (a middle row of a grid mesh).
+  const size_t          middle = surface.GetNumberOfPoints() / 2;
+  itk::Point<double, 3> probe;
+  for (int d = 0; d < 3; ++d)
+  {
+    probe[d] = surface.Points[3 * middle + d];
+  }
+  itk::ContinuousIndex<double, 3> c;
+  volume->TransformPhysicalPointToContinuousIndex(probe, c);
+  const long slice = std::clamp<long>(std::lround(c[2]), index0[2], index0[2] + long(size[2]) - 1);
+  // Slice intensities windowed to their 1st..99th percentiles.
+  std::vector<float> values;
+  for (unsigned y = 0; y < size[1]; ++y)
+  {
+    for (unsigned x = 0; x < size[0]; ++x)
+    {
+      values.push_back(volume->GetPixel({ { index0[0] + long(x), index0[1] + long(y), slice } }));
+    }
+  }
+  std::vector<float> sorted = values;
+  std::sort(sorted.begin(), sorted.end());
+  const float lo = sorted[sorted.size() / 100], hi = std::max(sorted[sorted.size() * 99 / 100], lo + 1e-6f);
+  const auto  textureSize = texture8->GetLargestPossibleRegion().GetSize();
+  // Scale both panels to a common height of at most 600 pixels.
+  const double     sliceScale = 600.0 / std::max<double>(size[1], 1);
+  const double     textureScale = std::min(600.0 / textureSize[1], 1400.0 / textureSize[0]);
+  const unsigned   sliceW = unsigned(size[0] * sliceScale), sliceH = unsigned(size[1] * sliceScale);
+  const unsigned   texW = unsigned(textureSize[0] * textureScale), texH = unsigned(textureSize[1] * textureScale);
+  auto             canvas = Canvas::New();
+  Canvas::SizeType canvasSize = { { sliceW + 10 + texW, std::max(sliceH, texH) } };
+  canvas->SetRegions(canvasSize);
+  canvas->Allocate();
+  RGB background;
+  background.Fill(32);
+  canvas->FillBuffer(background);
+  for (unsigned y = 0; y < sliceH; ++y)
+  {
+    for (unsigned x = 0; x < sliceW; ++x)
+    {
+      const float v = values[unsigned(y / sliceScale) * size[0] + unsigned(x / sliceScale)];
+      RGB         p;
+      p.Fill(static_cast<unsigned char>(std::clamp((v - lo) / (hi - lo), 0.0f, 1.0f) * 255.0f));
+      canvas->SetPixel({ { long(x), long(y) } }, p);
+    }
+  }
+  // The mesh's points near that slice.
+  const double halfSlice = 0.75 * volume->GetSpacing()[2];
+  for (size_t i = 0; i < surface.GetNumberOfPoints(); ++i)
+  {
+    itk::Point<double, 3> p;
+    for (int d = 0; d < 3; ++d)
+    {
+      p[d] = surface.Points[3 * i + d];
+    }
+    itk::ContinuousIndex<double, 3> ci;
+    volume->TransformPhysicalPointToContinuousIndex(p, ci);
+    if (std::abs(ci[2] - slice) > halfSlice / volume->GetSpacing()[2])
+    {
+      continue;
+    }
+    const long x = std::lround((ci[0] - index0[0]) * sliceScale), y = std::lround((ci[1] - index0[1]) * sliceScale);
+    for (long dy = -1; dy <= 1; ++dy)
+    {
+      for (long dx = -1; dx <= 1; ++dx)
+      {
+        if (x + dx >= 0 && y + dy >= 0 && x + dx < long(sliceW) && y + dy < long(sliceH))
+        {
+          RGB red;
+          red[0] = 255;
+          red[1] = 40;
+          red[2] = 40;
+          canvas->SetPixel({ { x + dx, y + dy } }, red);
+        }
+      }
+    }
+  }
+  for (unsigned y = 0; y < texH; ++y)
+  {
+    for (unsigned x = 0; x < texW; ++x)
+    {
+      RGB p;
+      p.Fill(texture8->GetPixel({ { long(x / textureScale), long(y / textureScale) } }));
+      canvas->SetPixel({ { long(sliceW + 10 + x), long(y) } }, p);
+    }
+  }
+  WriteImageFile(canvas.GetPointer(), path);
+}
+
+void
+RunUnwrap(UnwrapOptions & options)
+{
+  const auto               started = std::chrono::steady_clock::now();
+  Progress                 progress(options.Quiet, options.JsonLog);
+  nlohmann::json           report;
+  nlohmann::json           stages = nlohmann::json::array();
+  std::vector<std::string> warnings;
+  auto                     stageStart = std::chrono::steady_clock::now();
+  auto                     endStage = [&](const std::string & name) {
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - stageStart).count();
+    stages.push_back({ { "stage", name }, { "seconds", seconds }, { "peak_memory_mib", PeakMemoryMiB() } });
+    progress.Done(name, seconds);
+    stageStart = std::chrono::steady_clock::now();
+  };
+  const fs::path outputDirectory(options.Output);
+  if (fs::exists(outputDirectory) && !fs::is_directory(outputDirectory))
+  {
+    throw UsageError("output " + options.Output + " exists and is not a directory");
+  }
+  double     threshold = 0.0;
+  const bool automaticThreshold = options.Threshold == "auto";
+  if (!automaticThreshold)
+  {
+    size_t used = 0;
+    try
+    {
+      threshold = std::stod(options.Threshold, &used);
+    }
+    catch (const std::exception &)
+    {
+      used = 0;
+    }
+    if (used != options.Threshold.size() || !std::isfinite(threshold))
+    {
+      throw UsageError("--threshold must be a number or auto, not '" + options.Threshold + "'");
+    }
+  }
+  itk::TextureFidelityCalculator::ImageType::Pointer truthInk;
+  std::string                                        truthText;
+  if (!options.GroundTruth.empty())
+  {
+    const fs::path truthDirectory(options.GroundTruth);
+    std::ifstream  in(truthDirectory / "ground_truth.json");
+    if (!in)
+    {
+      throw UsageError("no ground_truth.json in " + options.GroundTruth);
+    }
+    const nlohmann::json truth = nlohmann::json::parse(in);
+    truthText = truth.at("text").get<std::string>();
+    auto inkReader = itk::ImageFileReader<TextureType>::New();
+    inkReader->SetFileName((truthDirectory / "ground_truth_ink.png").string());
+    inkReader->Update();
+    truthInk = inkReader->GetOutput();
+    const auto               spacing = truth.at("ink").at("image_spacing_mm");
+    TextureType::SpacingType inkSpacing;
+    inkSpacing[0] = spacing.at(0).get<double>();
+    inkSpacing[1] = spacing.at(1).get<double>();
+    truthInk->SetSpacing(inkSpacing);
+  }
+
+  // 1. Read.
+  progress.Start("read", "reading " + options.Input);
+  auto reader = itk::CTVolumeReader::New();
+  ConfigureReader(options.Reader, options.Input, *reader);
+  progress.Observe(reader);
+  reader->Update();
+  VolumeType::Pointer volume = reader->GetOutput();
+  for (const auto & w : reader->GetWarnings())
+  {
+    warnings.push_back("read: " + w);
+  }
+  const auto size = volume->GetLargestPossibleRegion().GetSize();
+  const auto spacing = volume->GetSpacing();
+  report["input"] = { { "path", options.Input },
+                      { "kind", reader->GetInputKind() },
+                      { "modality", reader->GetModality() },
+                      { "pixel_type", reader->GetPixelType() },
+                      { "size", { size[0], size[1], size[2] } },
+                      { "spacing_mm", { spacing[0], spacing[1], spacing[2] } },
+                      { "origin_mm", { volume->GetOrigin()[0], volume->GetOrigin()[1], volume->GetOrigin()[2] } },
+                      { "rescale",
+                        { { "slope", reader->GetRescaleSlope() }, { "intercept", reader->GetRescaleIntercept() } } } };
+  endStage("read");
+
+  // 2. Segment.
+  progress.Start("segment", "segmenting the sheet");
+  auto segmentation = itk::SheetSegmentationImageFilter<VolumeType, MaskType>::New();
+  segmentation->SetInput(volume);
+  segmentation->SetAutomaticThreshold(automaticThreshold);
+  segmentation->SetThreshold(threshold);
+  progress.Observe(segmentation);
+  segmentation->Update();
+  endStage("segment");
+
+  // 3. Mesh the mid-surface.
+  progress.Start("mesh", "meshing the sheet's mid-surface");
+  auto surfaceFilter = itk::SheetMidSurfaceMeshFilter<MaskType, MeshType>::New();
+  surfaceFilter->SetInput(segmentation->GetOutput());
+  surfaceFilter->SetIntensityImage(volume);
+  surfaceFilter->SetMethod(itk::SheetSurfaceMethodFromString(options.Method));
+  surfaceFilter->SetSpacingAlongSheet(options.MeshSpacing);
+  surfaceFilter->SetSpacingAlongAxis(options.MeshSpacing);
+  progress.Observe(surfaceFilter);
+  surfaceFilter->Update();
+  const itk::SheetMesh surface = surfaceFilter->GetSheetMesh();
+  const auto &         meshReport = surfaceFilter->GetReport();
+  for (const auto & w : meshReport.Warnings)
+  {
+    warnings.push_back("mesh: " + w);
+  }
+  endStage("mesh");
+
+  // 4. Unroll and flatten.
+  progress.Start("flatten", "unrolling and flattening by mass-spring simulation");
+  itk::MassSpringSheetFlattener flattener;
+  flattener.SetParameters(ResolveSimulationParameters(options.Simulation, surface));
+  flattener.SetStepCallback([&progress](itk::MassSpringSystem &, const std::string & phase, uint64_t step) {
+    progress.Tick(phase, step);
+    return true;
+  });
+  const itk::SheetMesh flat = flattener.Flatten(surface);
+  endStage("flatten");
+
+  // 5. Texture.
+  progress.Start("texture", "sampling the layered texture");
+  const double voxel = std::min({ spacing[0], spacing[1], spacing[2] });
+  const double pixelSize = options.PixelSize > 0.0 ? options.PixelSize : voxel / 2.0;
+  const double layerSpacing = options.LayerSpacing > 0.0 ? options.LayerSpacing : voxel / 2.0;
+  auto         surfaceMesh = itk::SheetMeshToMesh<MeshType>(surface);
+  auto         flatMesh = itk::SheetMeshToMesh<MeshType>(flat);
+  auto         texturer = itk::FlattenedTextureImageFilter<VolumeType, TextureType, MeshType>::New();
+  texturer->SetSurfaceMesh(surfaceMesh);
+  texturer->SetFlatMesh(flatMesh);
+  texturer->SetVolume(volume);
+  texturer->SetPixelSize(pixelSize);
+  texturer->SetMargin(2.0 * pixelSize);
+  texturer->SetNumberOfLayers(options.Layers);
+  texturer->SetLayerSpacing(layerSpacing);
+  texturer->SetFocus(options.Focus);
+  texturer->SetLayerSide(SideFromName(options.Side));
+  texturer->SetLayerFilter(FilterFromName(options.Filter));
+  progress.Observe(texturer);
+  texturer->Update();
+  auto perVertex = itk::LayeredTextureMeshFilter<MeshType, VolumeType, MeshType>::New();
+  perVertex->SetInput(surfaceMesh);
+  perVertex->SetVolume(volume);
+  perVertex->SetNumberOfLayers(options.Layers);
+  perVertex->SetLayerSpacing(layerSpacing);
+  perVertex->SetFocus(options.Focus);
+  perVertex->SetLayerSide(SideFromName(options.Side));
+  perVertex->SetLayerFilter(FilterFromName(options.Filter));
+  perVertex->Update();
+  std::vector<float> vertexTexture(surface.GetNumberOfPoints(), 0.0f);
+  for (auto it = perVertex->GetOutput()->GetPointData()->Begin(); it != perVertex->GetOutput()->GetPointData()->End();
+       ++it)
+  {
+    if (it.Index() < vertexTexture.size())
+    {
+      vertexTexture[it.Index()] = it.Value();
+    }
+  }
+  TextureType::Pointer     texture = FlipRows(texturer->GetOutput());
+  TextureMaskType::Pointer textureMask = FlipRows(texturer->GetMaskOutput());
+  LayerStackType::Pointer  layers = FlipRows(texturer->GetLayerStackOutput());
+  auto                     texture8 = EightBit(texture);
+  endStage("texture");
+
+  // 6. Write everything under a temporary directory, then move it into place.
+  progress.Start("write", "writing " + options.Output);
+  fs::create_directories(outputDirectory);
+  const fs::path staging = outputDirectory / (".partial-" + std::to_string(getpid()));
+  fs::remove_all(staging);
+  fs::create_directories(staging);
+  std::vector<std::string> written;
+  try
+  {
+    WriteImageFile(texture8.GetPointer(), staging / "texture.png");
+    WriteImageFile(texture.GetPointer(), staging / "texture.tif");
+    auto mask8 = itk::RescaleIntensityImageFilter<TextureMaskType, TextureMaskType>::New();
+    mask8->SetInput(textureMask);
+    mask8->SetOutputMinimum(0);
+    mask8->SetOutputMaximum(255);
+    mask8->Update();
+    WriteImageFile(mask8->GetOutput(), staging / "mask.png");
+    WriteImageFile(layers.GetPointer(), staging / "layers.tif");
+    WriteSheetMeshObj((staging / "surface.obj").string(), surface);
+    WriteSheetMeshVtp((staging / "surface.vtp").string(), surface, vertexTexture, "texture");
+    // Texture coordinates: the flat point's position in texture.png, (0, 0) bottom left.
+    const auto          tOrigin = texturer->GetOutput()->GetOrigin();
+    const auto          tSize = texturer->GetOutput()->GetLargestPossibleRegion().GetSize();
+    const double        width = tSize[0] * pixelSize, height = tSize[1] * pixelSize;
+    std::vector<double> uv(2 * flat.GetNumberOfPoints());
+    for (size_t i = 0; i < flat.GetNumberOfPoints(); ++i)
+    {
+      uv[2 * i] = (flat.Points[3 * i] - (tOrigin[0] - 0.5 * pixelSize)) / width;
+      uv[2 * i + 1] = (flat.Points[3 * i + 1] - (tOrigin[1] - 0.5 * pixelSize)) / height;
+    }
+    WriteSheetMeshObj((staging / "flat.obj").string(), flat, uv, "texture.png");
+    WritePreview(volume, surface, texture8, staging / "preview.png");
+  }
+  catch (...)
+  {
+    fs::remove_all(staging);
+    throw;
+  }
+  endStage("write");
+
+  // 7. Measures: distortion, and against the ground truth when there is one.
+  report["parameters"] = { { "threshold",
+                             { { "value", segmentation->GetThreshold() }, { "automatic", automaticThreshold } } },
+                           { "mesh",
+                             { { "method", itk::ToString(meshReport.Method) },
+                               { "spacing_along_sheet_mm", meshReport.SpacingAlongSheet },
+                               { "spacing_along_axis_mm", meshReport.SpacingAlongAxis } } },
+                           { "texture",
+                             { { "layers", options.Layers },
+                               { "layer_spacing_mm", layerSpacing },
+                               { "side", options.Side },
+                               { "filter", options.Filter },
+                               { "focus_mm", options.Focus },
+                               { "pixel_size_mm", pixelSize } } },
+                           { "simulation", ToJson(flattener.GetParameters()) } };
+  report["mesh"] = { { "points", surface.GetNumberOfPoints() },
+                     { "triangles", surface.GetNumberOfTriangles() },
+                     { "grid", { surface.GridRows, surface.GridColumns } },
+                     { "sheet_thickness_mm", meshReport.SheetThickness },
+                     { "sheet_length_mm", meshReport.SheetLength },
+                     { "minimum_curvature_radius_mm", meshReport.MinimumCurvatureRadius } };
+  report["simulation"] = ToJson(flattener.GetReport());
+  report["distortion"] = DistortionJson(surface, flat);
+  report["texture"] = {
+    { "size", { texture->GetLargestPossibleRegion().GetSize()[0], texture->GetLargestPossibleRegion().GetSize()[1] } },
+    { "sheet_pixels", texturer->GetNumberOfSheetPixels() },
+    { "clamped_samples", texturer->GetNumberOfClampedSamples() }
+  };
+  if (truthInk)
+  {
+    progress.Start("score", "comparing with the ground truth");
+    // The registration inside the fidelity measure warns about every empty overlap it
+    // tries; those are expected while it searches.
+    const bool warningsWereOn = itk::Object::GetGlobalWarningDisplay();
+    itk::Object::GlobalWarningDisplayOff();
+    auto fidelity = itk::TextureFidelityCalculator::New();
+    fidelity->SetReference(truthInk);
+    fidelity->SetTexture(texture);
+    fidelity->Compute();
+    auto legibility = itk::TextLegibility::New();
+    legibility->SetImage(texture);
+    legibility->SetTruthText(truthText);
+    legibility->Compute();
+    itk::Object::SetGlobalWarningDisplay(warningsWereOn);
+    report["legibility"] = { { "texture_ncc", fidelity->GetNormalizedCrossCorrelation() },
+                             { "mirrored", fidelity->GetMirrored() },
+                             { "rotation_degrees", fidelity->GetRotationDegrees() },
+                             { "character_error_rate", legibility->GetCharacterErrorRate() },
+                             { "recognized_text", legibility->GetRecognizedText() },
+                             { "truth_text", truthText } };
+    endStage("score");
+  }
+  report["stages"] = stages;
+  report["warnings"] = warnings;
+  report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  report["peak_memory_mib"] = PeakMemoryMiB();
+  WriteTextFileAtomically((staging / "report.json").string(), report.dump(2) + "\n");
+  for (const auto & entry : fs::directory_iterator(staging))
+  {
+    fs::rename(entry.path(), outputDirectory / entry.path().filename());
+  }
+  fs::remove_all(staging);
+  progress.Finish(options.Output, report);
+}
+} // namespace
+
+void
+RegisterUnwrapCommand(CLI::App & app)
+{
+  auto * command = app.add_subcommand(
+    "unwrap",
+    "From a CT scan to a flat, readable image: read, segment the sheet, mesh its mid-surface, unroll and flatten it by "
+    "mass-spring simulation, sample the layered texture. Writes texture.png/.tif, mask.png, layers.tif, surface.obj/"
+    ".vtp, flat.obj/.mtl, preview.png and report.json into OUTDIR.");
+  static UnwrapOptions options;
+  command->add_option("INPUT", options.Input, "DICOM directory, TIFF stack (directory or glob), NRRD/MHA/NIfTI file")
+    ->required();
+  command->add_option("-o,--output", options.Output, "output directory (created; files in it are replaced)")
+    ->required();
+  AddReaderOptions(*command, options.Reader);
+  const std::string seg = "Segmentation and mesh";
+  command->add_option("--threshold", options.Threshold, "sheet threshold in the volume's units (HU), or auto (Otsu)")
+    ->capture_default_str()
+    ->group(seg);
+  command->add_option("--mesh-spacing", options.MeshSpacing, "mesh spacing in mm; 0: automatic from the scene")
+    ->capture_default_str()
+    ->check(CLI::NonNegativeNumber)
+    ->group(seg);
+  command->add_option("--method", options.Method, "mid-surface method: auto, roll or general")
+    ->capture_default_str()
+    ->check(CLI::IsMember({ "auto", "roll", "general" }))
+    ->group(seg);
+  const std::string tex = "Texture";
+  command->add_option("--layers", options.Layers, "number of layers sampled along the normal")
+    ->capture_default_str()
+    ->check(CLI::PositiveNumber)
+    ->group(tex);
+  command->add_option("--layer-spacing", options.LayerSpacing, "distance between layers in mm; 0: half the voxel size")
+    ->capture_default_str()
+    ->check(CLI::NonNegativeNumber)
+    ->group(tex);
+  command->add_option("--side", options.Side, "layers on both sides of the surface, or positive / negative side only")
+    ->capture_default_str()
+    ->check(CLI::IsMember({ "both", "positive", "negative" }))
+    ->group(tex);
+  command->add_option("--filter", options.Filter, "how layers combine: mean, gaussian, max, min, median, single")
+    ->capture_default_str()
+    ->check(CLI::IsMember({ "mean", "gaussian", "max", "min", "median", "single" }))
+    ->group(tex);
+  command->add_option("--focus", options.Focus, "offset of the central layer along the normal, mm")
+    ->capture_default_str()
+    ->group(tex);
+  command->add_option("--pixel-size", options.PixelSize, "texture pixel size in mm; 0: half the voxel size")
+    ->capture_default_str()
+    ->check(CLI::NonNegativeNumber)
+    ->group(tex);
+  AddSimulationOptions(command, options.Simulation);
+  command->add_option("--ground-truth",
+                      options.GroundTruth,
+                      "phantom directory (virtual-unwrap phantom): report texture NCC and OCR character error rate");
+  command->add_flag("-q,--quiet", options.Quiet, "no progress output");
+  command->add_flag("--json", options.JsonLog, "progress as JSON lines on standard error");
+  command->callback([] { RunUnwrap(options); });
+}
+} // namespace vu
