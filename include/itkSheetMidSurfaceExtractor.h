@@ -120,8 +120,10 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
  * end, smoothed, moved to the intensity-weighted middle of the sheet along its normal and
  * extended to the ends of the material; slices are oriented like the middle slice.
  *
- * Slices whose traced length differs from the median by more than 5 % + 3 voxels are
- * interpolated from their neighbours (a warning says how many). Rows average the slices
+ * Slices whose traced length differs from the median by more than
+ * min(5 %, max(a quarter of the column spacing, 2 voxels)) + 1 voxel are interpolated
+ * from their neighbours (a warning says how many); the meshed rows run from the first to
+ * the last slice that agrees. Rows average the slices
  * within one row spacing (triangular weights), which suppresses the noise of single
  * slices. Automatic spacing along s: h = sqrt(8 R f t), the largest chord error f t at
  * the smallest radius of curvature R (ChordErrorFraction f, thickness t, both measured),
