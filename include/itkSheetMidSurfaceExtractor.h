@@ -123,7 +123,10 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
  * Slices whose traced length differs from the median by more than
  * min(5 %, max(a quarter of the column spacing, 2 voxels)) + 1 voxel are interpolated
  * from their neighbours (a warning says how many); the meshed rows run from the first to
- * the last slice that agrees. Rows average the slices
+ * the last slice that agrees. Each good slice is then aligned along the sheet to the mean
+ * of its good neighbours within five slices (tangential offsets of its columns fitted by
+ * a + b c and taken off its arc lengths), since the jitter of the traced ends would shear
+ * the grid and make it slightly non-developable. average the slices
  * within one row spacing (triangular weights), which suppresses the noise of single
  * slices. Automatic spacing along s: h = sqrt(8 R f t), the largest chord error f t at
  * the smallest radius of curvature R (ChordErrorFraction f, thickness t, both measured),
