@@ -118,7 +118,13 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
  * General method: in each slice the largest 2D component of the mask is thinned
  * (itk::BinaryThinningImageFilter), the longest path of the skeleton is traced from end to
  * end, smoothed, moved to the intensity-weighted middle of the sheet along its normal and
- * extended to the ends of the material; slices are oriented like the middle slice.
+ * extended to the ends of the material; the middle slice starts at its end nearer the
+ * centroid line (the inner end of a roll) and the others are oriented like it.
+ *
+ * Auto: the roll tracer is kept when, in at least 80 % of the slices with material, the
+ * traced length times the typical run length along the rays is 80-125 % of the slice's
+ * material area; otherwise the general tracer runs. A forced Roll that fails this test
+ * warns.
  *
  * Slices whose traced length differs from the median by more than
  * min(5 %, max(a quarter of the column spacing, 2 voxels)) + 1 voxel are interpolated

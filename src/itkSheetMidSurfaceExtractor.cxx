@@ -503,7 +503,9 @@ TraceRollSlice(const SliceSampler & sampler, const TraceContext & context)
     std::vector<std::pair<long, double>> accepted{ { 0, startRadius } };
     double                               slope = 0.0;
     double                               missedArc = 0.0;
-    for (long step = 1; step < 64 * na; ++step)
+    // A spiral makes about rmax / pitch turns; a trace circling inside material does not end.
+    const long maximumSteps = na * (static_cast<long>(std::ceil(rmax / pitch)) + 2);
+    for (long step = 1; step < maximumSteps; ++step)
     {
       const auto   k = static_cast<size_t>(((startAngle + dir * step) % na + na) % na);
       const auto & last = accepted.back();
@@ -909,12 +911,13 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
   };
 
   // A slice is traced well when its curve, as thick as the sheet across the rays, explains
-  // the slice's material.
+  // the slice's material, neither less nor (a trace circling inside material) more.
   auto rollExplainsMask = [&]() {
     size_t good = 0;
     for (size_t k = 0; k < nz; ++k)
     {
-      if (area[k] > 0.0 && !traces[k].empty() && ArcLength(traces[k]) * rayThickness[k] >= 0.8 * area[k])
+      const double explained = traces[k].empty() ? 0.0 : ArcLength(traces[k]) * rayThickness[k];
+      if (area[k] > 0.0 && explained >= 0.8 * area[k] && explained <= 1.25 * area[k])
       {
         ++good;
       }
@@ -929,6 +932,11 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
     if (method == SheetSurfaceMethodEnum::Auto)
     {
       method = rollExplainsMask() ? SheetSurfaceMethodEnum::Roll : SheetSurfaceMethodEnum::General;
+    }
+    else if (!rollExplainsMask())
+    {
+      m_Report.Warnings.emplace_back("the roll tracer explains the material of fewer than 80 % of the slices: the "
+                                     "sheet may not be rolled (try the general method)");
     }
   }
   if (method == SheetSurfaceMethodEnum::General)
@@ -989,7 +997,21 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
         goodSlices.push_back(k);
       }
     }
-    const Polyline & reference = traces[goodSlices[goodSlices.size() / 2]];
+    // The middle slice starts at its end nearer the axis (the inner end of a roll).
+    Polyline &   middle = traces[goodSlices[goodSlices.size() / 2]];
+    const size_t count = PolylineSize(middle);
+    const double axis[2] = { m_Report.AxisCentre[0] + m_Report.AxisSlope[0] * goodSlices[goodSlices.size() / 2] * sz,
+                             m_Report.AxisCentre[1] + m_Report.AxisSlope[1] * goodSlices[goodSlices.size() / 2] * sz };
+    if (std::hypot(middle[2 * count - 2] - axis[0], middle[2 * count - 1] - axis[1]) <
+        std::hypot(middle[0] - axis[0], middle[1] - axis[1]))
+    {
+      for (size_t i = 0; i < count / 2; ++i)
+      {
+        std::swap(middle[2 * i], middle[2 * (count - 1 - i)]);
+        std::swap(middle[2 * i + 1], middle[2 * (count - 1 - i) + 1]);
+      }
+    }
+    const Polyline reference = middle;
     for (long k : goodSlices)
     {
       Polyline &   line = traces[k];
