@@ -110,8 +110,9 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
  * 1.6 typical thicknesses (touching turns) are split evenly. The spiral is followed from
  * the crossing of smallest radius, both ways, step by step in angle: the next crossing is
  * the one closest to the radius predicted by a line fitted to the last accepted steps,
- * accepted only within 0.4 of the local turn spacing, so the trace never jumps to the
- * neighbouring turn; it ends after two voxels of arc without a crossing. The radius is
+ * accepted only within 0.4 of the local turn spacing of both that prediction and the last
+ * accepted radius, so the trace never jumps to the neighbouring turn; it ends after two
+ * voxels of arc without a crossing (or after rmax / pitch + 2 turns). The radius is
  * smoothed along the trace, the ends are extended along their tangents to the end of the
  * material, and the innermost end is s = 0.
  *
@@ -132,12 +133,10 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
  * the last slice that agrees. Each good slice is then aligned along the sheet to the mean
  * of its good neighbours within five slices (tangential offsets of its columns fitted by
  * a + b c and taken off its arc lengths), since the jitter of the traced ends would shear
- * the grid and make it slightly non-developable. average the slices
- * within one row spacing (triangular weights), which suppresses the noise of single
- * slices. Automatic spacing along s: h = sqrt(8 R f t), the largest chord error f t at
- * the smallest radius of curvature R (ChordErrorFraction f, thickness t, both measured),
- * but not finer than the in-plane voxel size; along w: h, but not finer than the slice
- * spacing.
+ * the grid and make it slightly non-developable. Rows average the slices within one row
+ * spacing (triangular weights), which suppresses the noise of single slices. Automatic spacing along s: h = sqrt(8 R f
+ * t), the largest chord error f t at the smallest radius of curvature R (ChordErrorFraction f, thickness t, both
+ * measured), but not finer than the in-plane voxel size; along w: h, but not finer than the slice spacing.
  *
  * Normals: triangles are oriented so that their normals point to the roll axis (the
  * inside face) for the roll method; for the general method they are dP/dw x dP/ds. For
