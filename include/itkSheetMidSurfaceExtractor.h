@@ -110,23 +110,33 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
  * 1.6 typical thicknesses (touching turns) are split evenly. The spiral is followed from
  * the crossing of smallest radius, both ways, step by step in angle: the next crossing is
  * the one closest to the radius predicted by a line fitted to the last accepted steps,
- * accepted only within 0.4 of the local turn spacing, so the trace never jumps to the
- * neighbouring turn; it ends after two voxels of arc without a crossing. The radius is
+ * accepted only within 0.4 of the local turn spacing of both that prediction and the last
+ * accepted radius, so the trace never jumps to the neighbouring turn; it ends after two
+ * voxels of arc without a crossing (or after rmax / pitch + 2 turns). The radius is
  * smoothed along the trace, the ends are extended along their tangents to the end of the
  * material, and the innermost end is s = 0.
  *
  * General method: in each slice the largest 2D component of the mask is thinned
  * (itk::BinaryThinningImageFilter), the longest path of the skeleton is traced from end to
  * end, smoothed, moved to the intensity-weighted middle of the sheet along its normal and
- * extended to the ends of the material; slices are oriented like the middle slice.
+ * extended to the ends of the material; the middle slice starts at its end nearer the
+ * centroid line (the inner end of a roll) and the others are oriented like it.
  *
- * Slices whose traced length differs from the median by more than 5 % + 3 voxels are
- * interpolated from their neighbours (a warning says how many). Rows average the slices
- * within one row spacing (triangular weights), which suppresses the noise of single
- * slices. Automatic spacing along s: h = sqrt(8 R f t), the largest chord error f t at
- * the smallest radius of curvature R (ChordErrorFraction f, thickness t, both measured),
- * but not finer than the in-plane voxel size; along w: h, but not finer than the slice
- * spacing.
+ * Auto: the roll tracer is kept when, in at least 80 % of the slices with material, the
+ * traced length times the typical run length along the rays is 80-125 % of the slice's
+ * material area; otherwise the general tracer runs. A forced Roll that fails this test
+ * warns.
+ *
+ * Slices whose traced length differs from the median by more than
+ * min(5 %, max(a quarter of the column spacing, 2 voxels)) + 1 voxel are interpolated
+ * from their neighbours (a warning says how many); the meshed rows run from the first to
+ * the last slice that agrees. Each good slice is then aligned along the sheet to the mean
+ * of its good neighbours within five slices (tangential offsets of its columns fitted by
+ * a + b c and taken off its arc lengths), since the jitter of the traced ends would shear
+ * the grid and make it slightly non-developable. Rows average the slices within one row
+ * spacing (triangular weights), which suppresses the noise of single slices. Automatic spacing along s: h = sqrt(8 R f
+ * t), the largest chord error f t at the smallest radius of curvature R (ChordErrorFraction f, thickness t, both
+ * measured), but not finer than the in-plane voxel size; along w: h, but not finer than the slice spacing.
  *
  * Normals: triangles are oriented so that their normals point to the roll axis (the
  * inside face) for the roll method; for the general method they are dP/dw x dP/ds. For

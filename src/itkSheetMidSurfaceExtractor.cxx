@@ -156,6 +156,32 @@ ResampleEvenly(const Polyline & line, size_t n)
   return out;
 }
 
+// Points at the given arc lengths along a polyline; beyond its ends, along the end segments.
+Polyline
+SampleAtArcLengths(const Polyline & line, const std::vector<double> & arcs)
+{
+  const size_t        m = PolylineSize(line);
+  std::vector<double> cumulative(m, 0.0);
+  for (size_t i = 1; i < m; ++i)
+  {
+    cumulative[i] = cumulative[i - 1] + std::hypot(line[2 * i] - line[2 * i - 2], line[2 * i + 1] - line[2 * i - 1]);
+  }
+  Polyline out(2 * arcs.size());
+  for (size_t c = 0; c < arcs.size(); ++c)
+  {
+    const double s = arcs[c];
+    const size_t segment = std::clamp<size_t>(
+      static_cast<size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), s) - cumulative.begin()), 1, m - 1);
+    const double length = cumulative[segment] - cumulative[segment - 1];
+    const double t = length > 0.0 ? (s - cumulative[segment - 1]) / length : 0.0;
+    for (int d = 0; d < 2; ++d)
+    {
+      out[2 * c + d] = (1.0 - t) * line[2 * (segment - 1) + d] + t * line[2 * segment + d];
+    }
+  }
+  return out;
+}
+
 // Bilinear sampling of one slice of the volume, in mm of the view's frame.
 class SliceSampler
 {
@@ -477,7 +503,9 @@ TraceRollSlice(const SliceSampler & sampler, const TraceContext & context)
     std::vector<std::pair<long, double>> accepted{ { 0, startRadius } };
     double                               slope = 0.0;
     double                               missedArc = 0.0;
-    for (long step = 1; step < 64 * na; ++step)
+    // A spiral makes about rmax / pitch turns; a trace circling inside material does not end.
+    const long maximumSteps = na * (static_cast<long>(std::ceil(rmax / pitch)) + 2);
+    for (long step = 1; step < maximumSteps; ++step)
     {
       const auto   k = static_cast<size_t>(((startAngle + dir * step) % na + na) % na);
       const auto & last = accepted.back();
@@ -883,12 +911,13 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
   };
 
   // A slice is traced well when its curve, as thick as the sheet across the rays, explains
-  // the slice's material.
+  // the slice's material, neither less nor (a trace circling inside material) more.
   auto rollExplainsMask = [&]() {
     size_t good = 0;
     for (size_t k = 0; k < nz; ++k)
     {
-      if (area[k] > 0.0 && !traces[k].empty() && ArcLength(traces[k]) * rayThickness[k] >= 0.8 * area[k])
+      const double explained = traces[k].empty() ? 0.0 : ArcLength(traces[k]) * rayThickness[k];
+      if (area[k] > 0.0 && explained >= 0.8 * area[k] && explained <= 1.25 * area[k])
       {
         ++good;
       }
@@ -903,6 +932,11 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
     if (method == SheetSurfaceMethodEnum::Auto)
     {
       method = rollExplainsMask() ? SheetSurfaceMethodEnum::Roll : SheetSurfaceMethodEnum::General;
+    }
+    else if (!rollExplainsMask())
+    {
+      m_Report.Warnings.emplace_back("the roll tracer explains the material of fewer than 80 % of the slices: the "
+                                     "sheet may not be rolled (try the general method)");
     }
   }
   if (method == SheetSurfaceMethodEnum::General)
@@ -963,7 +997,21 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
         goodSlices.push_back(k);
       }
     }
-    const Polyline & reference = traces[goodSlices[goodSlices.size() / 2]];
+    // The middle slice starts at its end nearer the axis (the inner end of a roll).
+    Polyline &   middle = traces[goodSlices[goodSlices.size() / 2]];
+    const size_t count = PolylineSize(middle);
+    const double axis[2] = { m_Report.AxisCentre[0] + m_Report.AxisSlope[0] * goodSlices[goodSlices.size() / 2] * sz,
+                             m_Report.AxisCentre[1] + m_Report.AxisSlope[1] * goodSlices[goodSlices.size() / 2] * sz };
+    if (std::hypot(middle[2 * count - 2] - axis[0], middle[2 * count - 1] - axis[1]) <
+        std::hypot(middle[0] - axis[0], middle[1] - axis[1]))
+    {
+      for (size_t i = 0; i < count / 2; ++i)
+      {
+        std::swap(middle[2 * i], middle[2 * (count - 1 - i)]);
+        std::swap(middle[2 * i + 1], middle[2 * (count - 1 - i) + 1]);
+      }
+    }
+    const Polyline reference = middle;
     for (long k : goodSlices)
     {
       Polyline &   line = traces[k];
@@ -1043,6 +1091,78 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
     {
       columnsOf[k] = ResampleEvenly(traces[k], columns);
     }
+  }
+  // The traced ends of a slice jitter by a fraction of a voxel, which shifts its columns
+  // along the sheet and makes the grid slightly non-developable (the flattener then has to
+  // strain or crease it). Align every good slice along the sheet to the mean of its good
+  // neighbours within five slices: the tangential offsets of its columns are fitted by
+  // a + b c and the slice is resampled at the corrected arc lengths.
+  {
+    const long            reach = 5;
+    std::vector<Polyline> aligned(columnsOf);
+    for (long k = firstGood; k <= lastGood; ++k)
+    {
+      if (!good[k])
+      {
+        continue;
+      }
+      Polyline reference(2 * columns, 0.0);
+      double   neighbours = 0.0;
+      for (long j = std::max(firstGood, k - reach); j <= std::min(lastGood, k + reach); ++j)
+      {
+        if (good[j] && j != k)
+        {
+          for (size_t i = 0; i < 2 * columns; ++i)
+          {
+            reference[i] += columnsOf[j][i];
+          }
+          neighbours += 1.0;
+        }
+      }
+      if (neighbours == 0.0)
+      {
+        continue;
+      }
+      for (double & value : reference)
+      {
+        value /= neighbours;
+      }
+      double sc = 0.0, so = 0.0, scc = 0.0, sco = 0.0;
+      for (size_t c = 0; c < columns; ++c)
+      {
+        const size_t a = c > 0 ? c - 1 : c, b = c + 1 < columns ? c + 1 : c;
+        double       tx = reference[2 * b] - reference[2 * a], ty = reference[2 * b + 1] - reference[2 * a + 1];
+        const double norm = std::hypot(tx, ty);
+        if (norm <= 0.0)
+        {
+          continue;
+        }
+        const double offset =
+          ((columnsOf[k][2 * c] - reference[2 * c]) * tx + (columnsOf[k][2 * c + 1] - reference[2 * c + 1]) * ty) /
+          norm;
+        const auto x = static_cast<double>(c);
+        sc += x;
+        so += offset;
+        scc += x * x;
+        sco += x * offset;
+      }
+      const auto   n = static_cast<double>(columns);
+      const double denominator = n * scc - sc * sc;
+      if (denominator <= 0.0)
+      {
+        continue;
+      }
+      const double        slope = (n * sco - sc * so) / denominator;
+      const double        intercept = (so - slope * sc) / n;
+      std::vector<double> arcs(columns);
+      for (size_t c = 0; c < columns; ++c)
+      {
+        arcs[c] = lengths[k] * static_cast<double>(c) / static_cast<double>(columns - 1) - intercept -
+                  slope * static_cast<double>(c);
+      }
+      aligned[k] = SampleAtArcLengths(traces[k], arcs);
+    }
+    columnsOf = std::move(aligned);
   }
   for (long k = firstGood; k <= lastGood; ++k)
   {

@@ -120,8 +120,10 @@ TEST(SheetMidSurfaceExtractor, SpiralMaskGivesTheSpiralFromItsInnerEnd)
   itk::SheetMidSurfaceParameters parameters;
   parameters.Method = itk::SheetSurfaceMethodEnum::General;
   extractor.SetParameters(parameters);
-  extractor.Extract(volume.View());
+  const itk::SheetMesh general = extractor.Extract(volume.View());
   EXPECT_NEAR(extractor.GetReport().SheetLength, 306.0, 10.0);
+  // It too starts at the end nearer the axis, the inner end (12, 0).
+  EXPECT_LT(std::hypot(general.Points[0] - 52.0, general.Points[1] - 40.0), 1.5);
 
   // User spacing.
   parameters.Method = itk::SheetSurfaceMethodEnum::Roll;
@@ -165,4 +167,45 @@ TEST(SheetMidSurfaceExtractor, BadInputThrows)
   parameters.ChordErrorFraction = 2.0;
   extractor.SetParameters(parameters);
   EXPECT_THROW(extractor.Extract(good.View()), itk::ExceptionObject);
+}
+
+TEST(SheetMidSurfaceExtractor, RollMethodOnAFlatSheetWarns)
+{
+  // A flat sheet, 3 voxels thick, 50 voxels wide, across 6 slices.
+  const size_t         size[3] = { 60, 30, 6 };
+  std::vector<uint8_t> mask(size[0] * size[1] * size[2], 0);
+  for (size_t k = 0; k < size[2]; ++k)
+  {
+    for (size_t j = 14; j < 17; ++j)
+    {
+      for (size_t i = 5; i < 55; ++i)
+      {
+        mask[(k * size[1] + j) * size[0] + i] = 1;
+      }
+    }
+  }
+  itk::SheetVolumeView view;
+  view.Mask = mask.data();
+  for (int d = 0; d < 3; ++d)
+  {
+    view.Size[d] = size[d];
+  }
+  itk::SheetMidSurfaceExtractor  extractor;
+  itk::SheetMidSurfaceParameters parameters;
+  parameters.Method = itk::SheetSurfaceMethodEnum::Roll;
+  extractor.SetParameters(parameters);
+  extractor.Extract(view);
+  ASSERT_FALSE(extractor.GetReport().Warnings.empty());
+  EXPECT_NE(extractor.GetReport().Warnings[0].find("may not be rolled"), std::string::npos);
+
+  // Auto picks the general tracer, which follows the sheet from end to end.
+  parameters.Method = itk::SheetSurfaceMethodEnum::Auto;
+  extractor.SetParameters(parameters);
+  const itk::SheetMesh mesh = extractor.Extract(view);
+  EXPECT_EQ(extractor.GetReport().Method, itk::SheetSurfaceMethodEnum::General);
+  EXPECT_NEAR(extractor.GetReport().SheetLength, 49.0, 1.5);
+  for (size_t p = 0; p < mesh.GetNumberOfPoints(); ++p)
+  {
+    EXPECT_NEAR(mesh.Points[3 * p + 1], 15.0, 0.1);
+  }
 }
