@@ -67,7 +67,7 @@ struct UnwrapOptions
   std::string       Threshold{ "auto" };
   double            MeshSpacing{ 0.0 };
   std::string       Method{ "auto" };
-  unsigned int      Layers{ 5 };
+  unsigned int      Layers{ 0 };
   double            LayerSpacing{ 0.0 };
   std::string       Side{ "both" };
   std::string       Filter{ "max" };
@@ -407,6 +407,12 @@ RunUnwrap(UnwrapOptions & options)
   const double voxel = std::min({ spacing[0], spacing[1], spacing[2] });
   const double pixelSize = options.PixelSize > 0.0 ? options.PixelSize : voxel / 2.0;
   const double layerSpacing = options.LayerSpacing > 0.0 ? options.LayerSpacing : voxel / 2.0;
+  // Automatic layers span the sheet's measured thickness and half a voxel beyond each face,
+  // so ink on either face or inside is seen, and no more.
+  const unsigned int layerCount =
+    options.Layers > 0
+      ? options.Layers
+      : 1 + 2 * static_cast<unsigned int>(std::ceil((0.5 * meshReport.SheetThickness + 0.5 * voxel) / layerSpacing));
   auto         surfaceMesh = itk::SheetMeshToMesh<MeshType>(surface);
   auto         flatMesh = itk::SheetMeshToMesh<MeshType>(flat);
   auto         texturer = itk::FlattenedTextureImageFilter<VolumeType, TextureType, MeshType>::New();
@@ -415,7 +421,7 @@ RunUnwrap(UnwrapOptions & options)
   texturer->SetVolume(volume);
   texturer->SetPixelSize(pixelSize);
   texturer->SetMargin(2.0 * pixelSize);
-  texturer->SetNumberOfLayers(options.Layers);
+  texturer->SetNumberOfLayers(layerCount);
   texturer->SetLayerSpacing(layerSpacing);
   texturer->SetFocus(options.Focus);
   texturer->SetLayerSide(SideFromName(options.Side));
@@ -425,7 +431,7 @@ RunUnwrap(UnwrapOptions & options)
   auto perVertex = itk::LayeredTextureMeshFilter<MeshType, VolumeType, MeshType>::New();
   perVertex->SetInput(surfaceMesh);
   perVertex->SetVolume(volume);
-  perVertex->SetNumberOfLayers(options.Layers);
+  perVertex->SetNumberOfLayers(layerCount);
   perVertex->SetLayerSpacing(layerSpacing);
   perVertex->SetFocus(options.Focus);
   perVertex->SetLayerSide(SideFromName(options.Side));
@@ -494,7 +500,7 @@ RunUnwrap(UnwrapOptions & options)
                                { "spacing_along_sheet_mm", meshReport.SpacingAlongSheet },
                                { "spacing_along_axis_mm", meshReport.SpacingAlongAxis } } },
                            { "texture",
-                             { { "layers", options.Layers },
+                             { { "layers", layerCount },
                                { "layer_spacing_mm", layerSpacing },
                                { "side", options.Side },
                                { "filter", options.Filter },
@@ -579,9 +585,10 @@ RegisterUnwrapCommand(CLI::App & app)
     ->check(CLI::IsMember({ "auto", "roll", "general" }))
     ->group(seg);
   const std::string tex = "Texture";
-  command->add_option("--layers", options.Layers, "number of layers sampled along the normal")
+  command->add_option("--layers", options.Layers,
+                      "number of layers sampled along the normal; 0: enough to span the measured sheet thickness")
     ->capture_default_str()
-    ->check(CLI::PositiveNumber)
+    ->check(CLI::NonNegativeNumber)
     ->group(tex);
   command->add_option("--layer-spacing", options.LayerSpacing, "distance between layers in mm; 0: half the voxel size")
     ->capture_default_str()
