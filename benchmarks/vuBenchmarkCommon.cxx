@@ -22,6 +22,7 @@
 #include "vuTestMeshes.h"
 
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 namespace vu {
@@ -68,6 +69,19 @@ BenchmarkMesh(const std::string & name)
     return BenchmarkDomeMesh(vertices);
   }
   throw std::invalid_argument("unknown mesh shape " + shape + " (roll, dome)");
+}
+
+std::vector<std::string>
+SplitList(const std::string & text)
+{
+  std::vector<std::string> parts;
+  std::stringstream        stream(text);
+  std::string              part;
+  while (std::getline(stream, part, ','))
+  {
+    parts.push_back(part);
+  }
+  return parts;
 }
 
 void

@@ -25,6 +25,7 @@
 
 #include <ostream>
 #include <string>
+#include <vector>
 
 namespace vu {
 /** The standard phantom's true mid-surface (a 3-turn roll) with about targetVertices
@@ -38,6 +39,10 @@ BenchmarkDomeMesh(size_t targetVertices);
  * with an optional k or M suffix). */
 itk::SheetMesh
 BenchmarkMesh(const std::string & name);
+
+/** "a,b,c" -> {"a", "b", "c"}: the benchmarks' list options. */
+std::vector<std::string>
+SplitList(const std::string & text);
 
 void
 WriteFlatteningCsvHeader(std::ostream & out);

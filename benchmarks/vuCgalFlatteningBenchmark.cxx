@@ -36,26 +36,16 @@ main(int argc, char * argv[])
   std::vector<std::string> methods = { "lscm", "arap" };
   std::string              csvPath;
   size_t                   maxArap = 200000;
-  auto                     split = [](const std::string & text) {
-    std::vector<std::string> parts;
-    std::stringstream        stream(text);
-    std::string              part;
-    while (std::getline(stream, part, ','))
-    {
-      parts.push_back(part);
-    }
-    return parts;
-  };
   for (int a = 1; a < argc; ++a)
   {
     const std::string arg = argv[a];
     if (arg == "--meshes" && a + 1 < argc)
     {
-      meshes = split(argv[++a]);
+      meshes = vu::SplitList(argv[++a]);
     }
     else if (arg == "--methods" && a + 1 < argc)
     {
-      methods = split(argv[++a]);
+      methods = vu::SplitList(argv[++a]);
     }
     else if (arg == "--csv" && a + 1 < argc)
     {

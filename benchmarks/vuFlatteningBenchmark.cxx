@@ -40,19 +40,6 @@
 namespace {
 using Clock = std::chrono::steady_clock;
 
-std::vector<std::string>
-Split(const std::string & text)
-{
-  std::vector<std::string> parts;
-  std::stringstream        stream(text);
-  std::string              part;
-  while (std::getline(stream, part, ','))
-  {
-    parts.push_back(part);
-  }
-  return parts;
-}
-
 void
 RunMassSpring(std::ostream &                              out,
               const std::string &                         meshName,
@@ -144,11 +131,11 @@ main(int argc, char * argv[])
     const std::string arg = argv[a];
     if (arg == "--meshes" && a + 1 < argc)
     {
-      meshes = Split(argv[++a]);
+      meshes = vu::SplitList(argv[++a]);
     }
     else if (arg == "--methods" && a + 1 < argc)
     {
-      methods = Split(argv[++a]);
+      methods = vu::SplitList(argv[++a]);
     }
     else if (arg == "--csv" && a + 1 < argc)
     {

@@ -213,7 +213,12 @@ main(int argc, char * argv[])
                                MassSpringIntegratorEnum::SymplecticEuler,
                                MassSpringIntegratorEnum::RungeKutta4 })
       {
-        const double bound = LargestPassing(1e-4 / wMax, 4.0 / wMax, [&](double h) {
+        // Undamped, forward Euler and midpoint amplify every mode at every h > 0
+        // (|1 + i w h| > 1, |1 + z + z^2/2| = sqrt(1 + (w h)^4 / 4) > 1): bound 0. Bisection
+        // with a rounding tolerance would report a tiny positive step instead.
+        const bool   alwaysUnstable = c == 0.0 && (integrator == MassSpringIntegratorEnum::ExplicitEuler ||
+                                                 integrator == MassSpringIntegratorEnum::Midpoint);
+        const double bound = alwaysUnstable ? 0.0 : LargestPassing(1e-4 / wMax, 4.0 / wMax, [&](double h) {
           for (double wk : w)
           {
             if (Amplification(integrator, wk, c, h) > 1.0 + 1e-12)

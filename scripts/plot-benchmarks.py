@@ -40,6 +40,7 @@ def pareto():
     markers = {"mass-spring/implicit-euler": "o", "mass-spring/rk4": "s", "mass-spring/symplectic-euler": "^",
                "mass-spring/midpoint": "v", "mass-spring/euler": "x", "itk-parameterization": "D",
                "cgal-lscm": "P", "cgal-arap": "*"}
+    unique = {}
     for ax, mesh in zip(axes[0], meshes):
         for r in (r for r in results if r["mesh"] == mesh):
             ok = r["edge_strain_p95"] not in ("", None)
@@ -55,7 +56,7 @@ def pareto():
         ax.set_xlabel("wall time (s)")
         ax.set_ylabel("edge strain p95 (top edge: failed/diverged)")
         handles, labels = ax.get_legend_handles_labels()
-        unique = dict(zip(labels, handles))
+        unique.update(zip(labels, handles))
     fig.legend(unique.values(), unique.keys(), loc="lower center", ncol=4, fontsize=8)
     fig.tight_layout(rect=(0, 0.12, 1, 1))
     fig.savefig(os.path.join(images, "pareto.png"), dpi=90)
