@@ -413,9 +413,9 @@ RunUnwrap(UnwrapOptions & options)
     options.Layers > 0
       ? options.Layers
       : 1 + 2 * static_cast<unsigned int>(std::ceil((0.5 * meshReport.SheetThickness + 0.5 * voxel) / layerSpacing));
-  auto         surfaceMesh = itk::SheetMeshToMesh<MeshType>(surface);
-  auto         flatMesh = itk::SheetMeshToMesh<MeshType>(flat);
-  auto         texturer = itk::FlattenedTextureImageFilter<VolumeType, TextureType, MeshType>::New();
+  auto surfaceMesh = itk::SheetMeshToMesh<MeshType>(surface);
+  auto flatMesh = itk::SheetMeshToMesh<MeshType>(flat);
+  auto texturer = itk::FlattenedTextureImageFilter<VolumeType, TextureType, MeshType>::New();
   texturer->SetSurfaceMesh(surfaceMesh);
   texturer->SetFlatMesh(flatMesh);
   texturer->SetVolume(volume);
@@ -585,8 +585,10 @@ RegisterUnwrapCommand(CLI::App & app)
     ->check(CLI::IsMember({ "auto", "roll", "general" }))
     ->group(seg);
   const std::string tex = "Texture";
-  command->add_option("--layers", options.Layers,
-                      "number of layers sampled along the normal; 0: enough to span the measured sheet thickness")
+  command
+    ->add_option("--layers",
+                 options.Layers,
+                 "number of layers sampled along the normal; 0: enough to span the measured sheet thickness")
     ->capture_default_str()
     ->check(CLI::NonNegativeNumber)
     ->group(tex);
