@@ -9,7 +9,6 @@ Usage: /usr/bin/python3 scripts/phantom-slices.py OUT DIR [DIR ...]
 import json
 import os
 import sys
-import zlib
 
 import matplotlib
 
@@ -18,27 +17,9 @@ import matplotlib.image as mpimg  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from vu_mha import read_mha  # noqa: E402
 
-def read_mha(path):
-    with open(path, "rb") as f:
-        data = f.read()
-    header = {}
-    offset = 0
-    while True:
-        end = data.index(b"\n", offset)
-        key, _, value = data[offset:end].decode().partition(" = ")
-        header[key.strip()] = value.strip()
-        offset = end + 1
-        if key.strip() == "ElementDataFile":
-            break
-    raw = data[offset:]
-    if header.get("CompressedData", "False") == "True":
-        raw = zlib.decompress(raw)
-    types = {"MET_SHORT": np.int16, "MET_FLOAT": np.float32, "MET_USHORT": np.uint16}
-    size = [int(v) for v in header["DimSize"].split()]
-    volume = np.frombuffer(raw, dtype=types[header["ElementType"]]).reshape(size[::-1])
-    spacing = [float(v) for v in header["ElementSpacing"].split()]
-    return volume, spacing
 
 
 def main():
@@ -47,7 +28,7 @@ def main():
     for directory in sys.argv[2:]:
         with open(os.path.join(directory, "ground_truth.json")) as f:
             truth = json.load(f)
-        volume, spacing = read_mha(os.path.join(directory, truth["volume"]["path"]))
+        volume, spacing, _ = read_mha(os.path.join(directory, truth["volume"]["path"]))
         ink = mpimg.imread(os.path.join(directory, "ground_truth_ink.png"))
         axial = volume[volume.shape[0] // 2]
         figure, axes = plt.subplots(1, 2, figsize=(8.0, 2.6), gridspec_kw={"width_ratios": [1, 2.4]})

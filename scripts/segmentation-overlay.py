@@ -11,7 +11,6 @@ Usage: /usr/bin/python3 scripts/segmentation-overlay.py OUT PHANTOM_DIR SEGMENT_
 import json
 import os
 import sys
-import zlib
 
 import matplotlib
 
@@ -19,28 +18,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from vu_mha import read_mha  # noqa: E402
 
-def read_mha(path):
-    with open(path, "rb") as f:
-        data = f.read()
-    header = {}
-    offset = 0
-    while True:
-        end = data.index(b"\n", offset)
-        key, _, value = data[offset:end].decode().partition(" = ")
-        header[key.strip()] = value.strip()
-        offset = end + 1
-        if key.strip() == "ElementDataFile":
-            break
-    raw = data[offset:]
-    if header.get("CompressedData", "False") == "True":
-        raw = zlib.decompress(raw)
-    types = {"MET_SHORT": np.int16, "MET_FLOAT": np.float32, "MET_UCHAR": np.uint8}
-    size = [int(v) for v in header["DimSize"].split()]
-    volume = np.frombuffer(raw, dtype=types[header["ElementType"]]).reshape(size[::-1])
-    spacing = [float(v) for v in header["ElementSpacing"].split()]
-    origin = [float(v) for v in header["Offset"].split()]
-    return volume, spacing, origin
 
 
 def read_obj(path):

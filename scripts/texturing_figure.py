@@ -4,6 +4,7 @@
 Usage: /usr/bin/python3 scripts/texturing_figure.py BUILD_DIR OUTPUT_PNG
 Reads BUILD_DIR/FlattenedTexture_*.mha (MetaImage, float, uncompressed).
 """
+import os
 import sys
 
 import matplotlib
@@ -12,21 +13,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from vu_mha import read_mha  # noqa: E402
 
-def read_mha(path):
-    data = open(path, "rb").read()
-    header, offset = {}, 0
-    while True:
-        end = data.index(b"\n", offset)
-        key, value = [part.strip() for part in data[offset:end].decode().split("=", 1)]
-        header[key] = value
-        offset = end + 1
-        if key == "ElementDataFile":
-            break
-    dims = [int(x) for x in header["DimSize"].split()]
-    types = {"MET_FLOAT": np.float32, "MET_UCHAR": np.uint8}
-    array = np.frombuffer(data[offset:], dtype=types[header["ElementType"]], count=int(np.prod(dims)))
-    return array.reshape(dims[::-1])
 
 
 def main():
@@ -41,7 +30,7 @@ def main():
     ]
     figure, axes = plt.subplots(3, 2, figsize=(10, 9))
     for axis, (name, title) in zip(axes.ravel(), panels):
-        image = read_mha(f"{build}/FlattenedTexture_{name}.mha")
+        image, _, _ = read_mha(f"{build}/FlattenedTexture_{name}.mha")
         # Row index grows with flat y: show y upwards.
         axis.imshow(image, cmap="gray", origin="lower", interpolation="nearest")
         axis.set_title(title, fontsize=9)

@@ -4,17 +4,7 @@
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 
-function(expect_failure name pattern)
-  execute_process(COMMAND ${TOOL} segment ${ARGN} RESULT_VARIABLE result ERROR_VARIABLE error OUTPUT_QUIET)
-  if(result EQUAL 0)
-    message(FATAL_ERROR "${name}: expected failure, got success")
-  endif()
-  string(REGEX MATCHALL "\n" newlines "${error}")
-  list(LENGTH newlines lines)
-  if(NOT lines EQUAL 1 OR NOT error MATCHES "^virtual-unwrap: error: .*${pattern}")
-    message(FATAL_ERROR "${name}: expected one error line matching '${pattern}', got:\n${error}")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/CommandTestHelpers.cmake)
 
 execute_process(COMMAND ${TOOL} phantom folded -o ${WORK}/phantom --format mha
   RESULT_VARIABLE result ERROR_VARIABLE error OUTPUT_QUIET)
@@ -42,9 +32,9 @@ if(NOT method STREQUAL "general" OR points LESS 100 OR threshold LESS -900 OR th
                       "spacing along the axis ${along}")
 endif()
 
-expect_failure(missing "volume not found" ${WORK}/nothere.mha -o ${WORK}/bad)
-expect_failure(threshold "nothing at or above the threshold" ${WORK}/phantom/volume.mha -o ${WORK}/bad
+vu_expect_failure(segment missing "volume not found" ${WORK}/nothere.mha -o ${WORK}/bad)
+vu_expect_failure(segment threshold "nothing at or above the threshold" ${WORK}/phantom/volume.mha -o ${WORK}/bad
   --threshold 9000)
-expect_failure(spacing "--mesh-spacing must be a number" ${WORK}/phantom/volume.mha -o ${WORK}/bad
+vu_expect_failure(segment spacing "--mesh-spacing must be a number" ${WORK}/phantom/volume.mha -o ${WORK}/bad
   --mesh-spacing fine)
-expect_failure(method "unknown surface method" ${WORK}/phantom/volume.mha -o ${WORK}/bad --method spiral)
+vu_expect_failure(segment method "unknown surface method" ${WORK}/phantom/volume.mha -o ${WORK}/bad --method spiral)

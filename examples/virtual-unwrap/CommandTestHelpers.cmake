@@ -1,0 +1,14 @@
+# Shared by the command tests (*CommandTest.cmake): runs `TOOL SUBCOMMAND ARGS...` and
+# requires a failure reported as exactly one line "virtual-unwrap: error: ..." matching
+# pattern on stderr.
+function(vu_expect_failure subcommand name pattern)
+  execute_process(COMMAND ${TOOL} ${subcommand} ${ARGN} RESULT_VARIABLE result ERROR_VARIABLE error OUTPUT_QUIET)
+  if(result EQUAL 0)
+    message(FATAL_ERROR "${name}: expected failure, got success")
+  endif()
+  string(REGEX MATCHALL "\n" newlines "${error}")
+  list(LENGTH newlines lines)
+  if(NOT lines EQUAL 1 OR NOT error MATCHES "^virtual-unwrap: error: .*${pattern}")
+    message(FATAL_ERROR "${name}: expected one error line matching '${pattern}', got:\n${error}")
+  endif()
+endfunction()
