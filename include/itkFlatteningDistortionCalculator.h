@@ -19,6 +19,7 @@
 #define itkFlatteningDistortionCalculator_h
 
 #include "VirtualUnwrappingExport.h"
+#include "itkDataObject.h"
 #include "itkObject.h"
 #include "itkObjectFactory.h"
 #include "itkSheetMesh.h"
@@ -64,6 +65,12 @@ public:
   /** The flattened sheet; z is ignored. */
   void
   SetFlatMesh(const SheetMesh & mesh);
+  /** The same from itk::Mesh<float, 3>, itk::Mesh<double, 3> or itk::QuadEdgeMesh<double, 3>
+   * (see DataObjectToSheetMesh); these are the setters Python uses. */
+  void
+  SetSurfaceMesh(const DataObject * mesh);
+  void
+  SetFlatMesh(const DataObject * mesh);
 
   void
   Compute();

@@ -19,6 +19,7 @@
 #define itkLayeredTextureMeshFilter_hxx
 
 #include "itkLayeredTextureMeshFilter.h"
+#include "itkMultiThreaderBase.h"
 
 #include "itkLayeredVolumeSampler.h"
 #include "itkLinearInterpolateImageFunction.h"

@@ -27,18 +27,28 @@
 #include <vector>
 
 namespace itk {
-/** Which particles the unroll phase holds. */
-enum class SheetLockedEdgeEnum : uint8_t
+/** \class MassSpringSheetFlattenerEnums
+ * \brief Enumerations of MassSpringSheetFlattener, nested in a class the way ITK wraps them.
+ * \ingroup VirtualUnwrapping
+ */
+class VirtualUnwrapping_EXPORT MassSpringSheetFlattenerEnums
 {
-  /** Nothing held: no unroll phase, the sheet is only dropped onto the plane. */
-  None,
-  /** Grid meshes: the end column (constant arc length) farther from the roll's axis. */
-  OuterEdge,
-  /** Grid meshes: the end column nearer the roll's axis. */
-  InnerEdge,
-  /** The particles listed in MassSpringFlatteningParameters::LockedParticles. */
-  Custom
+public:
+  /** Which particles the unroll phase holds. */
+  enum class LockedEdge : uint8_t
+  {
+    /** Nothing held: no unroll phase, the sheet is only dropped onto the plane. */
+    None,
+    /** Grid meshes: the end column (constant arc length) farther from the roll's axis. */
+    OuterEdge,
+    /** Grid meshes: the end column nearer the roll's axis. */
+    InnerEdge,
+    /** The particles listed in MassSpringFlatteningParameters::LockedParticles. */
+    Custom
+  };
 };
+/** Shorter name used throughout the module. */
+using SheetLockedEdgeEnum = MassSpringSheetFlattenerEnums::LockedEdge;
 VirtualUnwrapping_EXPORT const char *
 ToString(SheetLockedEdgeEnum edge);
 VirtualUnwrapping_EXPORT SheetLockedEdgeEnum

@@ -29,21 +29,31 @@
 #include <vector>
 
 namespace itk {
-/** Integrators of the mass-spring system. */
-enum class MassSpringIntegratorEnum : uint8_t
+/** \class MassSpringSystemEnums
+ * \brief Enumerations of MassSpringSystem, nested in a class the way ITK wraps them.
+ * \ingroup VirtualUnwrapping
+ */
+class VirtualUnwrapping_EXPORT MassSpringSystemEnums
 {
-  /** Forward (explicit) Euler: x += h v(t), v += h a(t). Grows at every time step without damping. */
-  ExplicitEuler,
-  /** Explicit midpoint (second-order Runge-Kutta). Grows at every time step without damping. */
-  Midpoint,
-  /** Classical fourth-order Runge-Kutta: stable for w h < 2.83 on an undamped spring mode. */
-  RungeKutta4,
-  /** Semi-implicit (symplectic) Euler: v += h a(t), x += h v(t+h). Stable for w h < 2. */
-  SymplecticEuler,
-  /** Implicit Euler solved by the local/global method of Liu et al. 2013 with a prefactored
-   * sparse Cholesky (LDLT) system: unconditionally stable. */
-  ImplicitEuler
+public:
+  /** Integrators of the mass-spring system. */
+  enum class Integrator : uint8_t
+  {
+    /** Forward (explicit) Euler: x += h v(t), v += h a(t). Grows at every time step without damping. */
+    ExplicitEuler,
+    /** Explicit midpoint (second-order Runge-Kutta). Grows at every time step without damping. */
+    Midpoint,
+    /** Classical fourth-order Runge-Kutta: stable for w h < 2.83 on an undamped spring mode. */
+    RungeKutta4,
+    /** Semi-implicit (symplectic) Euler: v += h a(t), x += h v(t+h). Stable for w h < 2. */
+    SymplecticEuler,
+    /** Implicit Euler solved by the local/global method of Liu et al. 2013 with a prefactored
+     * sparse Cholesky (LDLT) system: unconditionally stable. */
+    ImplicitEuler
+  };
 };
+/** Shorter name used throughout the module. */
+using MassSpringIntegratorEnum = MassSpringSystemEnums::Integrator;
 
 /** Name of an integrator as the tool and the reports spell it. */
 VirtualUnwrapping_EXPORT const char *

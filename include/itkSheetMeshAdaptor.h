@@ -18,7 +18,9 @@
 #ifndef itkSheetMeshAdaptor_h
 #define itkSheetMeshAdaptor_h
 
+#include "VirtualUnwrappingExport.h"
 #include "itkCellInterface.h"
+#include "itkDataObject.h"
 #include "itkMacro.h"
 #include "itkMetaDataObject.h"
 #include "itkSheetMesh.h"
@@ -168,6 +170,13 @@ SheetMeshToMesh(const SheetMesh & sheet)
   }
   return mesh;
 }
+
+/** MeshToSheetMesh for the mesh types the module is wrapped for, behind a DataObject (as
+ * Python and other type-erased callers hold them): itk::Mesh<float, 3>,
+ * itk::Mesh<double, 3> and itk::QuadEdgeMesh<double, 3>. Throws itk::ExceptionObject for
+ * a null pointer or another type. */
+VirtualUnwrapping_EXPORT SheetMesh
+DataObjectToSheetMesh(const DataObject * mesh);
 
 } // end namespace itk
 

@@ -23,6 +23,7 @@
 #include "itkObjectFactory.h"
 #include "itkSheetMesh.h"
 #include "itkSheetPhantomGeometry.h"
+#include "itkSheetPhantomSource.h"
 
 namespace itk {
 /** \class SheetMeshErrorCalculator
@@ -65,6 +66,13 @@ public:
   SetGeometry(const SheetPhantomGeometry & geometry);
   void
   SetMesh(const SheetMesh & mesh);
+  /** The ground truth of a phantom source (updated or with its output information
+   * generated) and a mesh of the wrapped types (see DataObjectToSheetMesh): the setters
+   * Python uses. */
+  void
+  SetPhantom(const SheetPhantomSource * phantom);
+  void
+  SetMesh(const DataObject * mesh);
   itkSetMacro(VoxelSize, double);
   itkGetConstMacro(VoxelSize, double);
   itkSetMacro(CoverageTolerance, double);

@@ -27,16 +27,26 @@
 #include <vector>
 
 namespace itk {
-/** How the mid-surface of a sheet is traced in each slice. */
-enum class SheetSurfaceMethodEnum : uint8_t
+/** \class SheetMidSurfaceExtractorEnums
+ * \brief Enumerations of SheetMidSurfaceExtractor, nested in a class the way ITK wraps them.
+ * \ingroup VirtualUnwrapping
+ */
+class VirtualUnwrapping_EXPORT SheetMidSurfaceExtractorEnums
 {
-  /** Roll first; the general tracer when the roll tracer does not explain the mask. */
-  Auto,
-  /** Spiral tracing in polar coordinates about the roll axis (rolled sheets). */
-  Roll,
-  /** Skeleton of each slice's mask (folded, wavy or other open sheets). */
-  General
+public:
+  /** How the mid-surface of a sheet is traced in each slice. */
+  enum class Method : uint8_t
+  {
+    /** Roll first; the general tracer when the roll tracer does not explain the mask. */
+    Auto,
+    /** Spiral tracing in polar coordinates about the roll axis (rolled sheets). */
+    Roll,
+    /** Skeleton of each slice's mask (folded, wavy or other open sheets). */
+    General
+  };
 };
+/** Shorter name used throughout the module. */
+using SheetSurfaceMethodEnum = SheetMidSurfaceExtractorEnums::Method;
 VirtualUnwrapping_EXPORT const char *
 ToString(SheetSurfaceMethodEnum method);
 /** "auto", "roll" or "general"; throws itk::ExceptionObject on another name. */

@@ -111,6 +111,34 @@ public:
   {
     return m_Report.Warnings;
   }
+  /** Figures of the report as plain values (for wrapped languages): the measured sheet
+   * thickness, the smallest radius of curvature and the sheet's length along the
+   * mid-surface, in mm, and the spacings actually used. */
+  double
+  GetSheetThickness() const
+  {
+    return m_Report.SheetThickness;
+  }
+  double
+  GetMinimumCurvatureRadius() const
+  {
+    return m_Report.MinimumCurvatureRadius;
+  }
+  double
+  GetSheetLength() const
+  {
+    return m_Report.SheetLength;
+  }
+  double
+  GetSpacingAlongSheetUsed() const
+  {
+    return m_Report.SpacingAlongSheet;
+  }
+  double
+  GetSpacingAlongAxisUsed() const
+  {
+    return m_Report.SpacingAlongAxis;
+  }
 
 protected:
   SheetMidSurfaceMeshFilter();

@@ -178,6 +178,13 @@ public:
   {
     return m_Geometry;
   }
+  /** The ground-truth ink image of the geometry (x along the sheet, y along its width,
+   * 0..1 coverage, spacing in mm); valid after Update(). */
+  const InkImageType *
+  GetInkImage() const
+  {
+    return m_Geometry.GetInkImage();
+  }
 
 protected:
   SheetPhantomSource() = default;

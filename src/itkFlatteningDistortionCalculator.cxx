@@ -18,6 +18,7 @@
 #include "itkFlatteningDistortionCalculator.h"
 
 #include "itkMath.h"
+#include "itkSheetMeshAdaptor.h"
 
 #include <algorithm>
 #include <array>
@@ -65,6 +66,18 @@ CornerAngle(const Vec3 & apex, const Vec3 & b, const Vec3 & c)
   return std::atan2(Norm(Cross(u, v)), Dot(u, v));
 }
 } // namespace
+
+void
+FlatteningDistortionCalculator::SetSurfaceMesh(const DataObject * mesh)
+{
+  this->SetSurfaceMesh(DataObjectToSheetMesh(mesh));
+}
+
+void
+FlatteningDistortionCalculator::SetFlatMesh(const DataObject * mesh)
+{
+  this->SetFlatMesh(DataObjectToSheetMesh(mesh));
+}
 
 void
 FlatteningDistortionCalculator::SetSurfaceMesh(const SheetMesh & mesh)

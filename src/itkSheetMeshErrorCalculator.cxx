@@ -18,6 +18,7 @@
 #include "itkSheetMeshErrorCalculator.h"
 
 #include "itkMultiThreaderBase.h"
+#include "itkSheetMeshAdaptor.h"
 
 #include <algorithm>
 #include <cmath>
@@ -105,6 +106,22 @@ SheetMeshErrorCalculator::SetMesh(const SheetMesh & mesh)
 {
   m_Mesh = mesh;
   this->Modified();
+}
+
+void
+SheetMeshErrorCalculator::SetPhantom(const SheetPhantomSource * phantom)
+{
+  if (phantom == nullptr)
+  {
+    itkExceptionMacro(<< "no phantom source given");
+  }
+  this->SetGeometry(phantom->GetGeometry());
+}
+
+void
+SheetMeshErrorCalculator::SetMesh(const DataObject * mesh)
+{
+  this->SetMesh(DataObjectToSheetMesh(mesh));
 }
 
 void

@@ -1,0 +1,188 @@
+# Wrapping check without Python: reads wrapping/*.wrap with stand-ins for ITK's wrapping
+# macros and proves that the module's Python wrapping asks for things that exist.
+#
+#   cmake -DMODE=classes -DSOURCE_DIR=<module> -P VirtualUnwrappingWrapCheck.cmake
+#     every public class of include/ (an ITK object with itkNewMacro, or an ...Enums
+#     class) has an itk_wrap_class / itk_wrap_simple_class entry in some .wrap file, and
+#     every class a .wrap file names is declared in include/ or ITK.
+#   cmake -DMODE=instantiate -DWRAP_FILE=<file.wrap> -DSOURCE_DIR=<module>
+#         -DOUTPUT_DIR=<dir> -DCXX=<compiler> -DFLAGS_FILE=<file> [-DEXPECT_FAILURE=<text>]
+#         -P VirtualUnwrappingWrapCheck.cmake
+#     turns the .wrap file into a C++ source (its includes, one explicit instantiation
+#     "template class C< T >;" per itk_wrap_template, a sizeof check per simple class)
+#     and compiles it against the installed ITK (-fsyntax-only, with the flags in
+#     FLAGS_FILE, one per line). With EXPECT_FAILURE the compile must fail and its
+#     errors must mention that text (used to test the check itself).
+#
+# The type variables follow ITK 5.2's Wrapping/WrapBasicTypes.cmake and WrapITKTypes.cmake
+# for the default configuration (ITK_WRAP_IMAGE_DIMS 2;3; unsigned char, signed short and
+# float wrapped; double not).
+cmake_minimum_required(VERSION 3.16)
+
+if(NOT SOURCE_DIR)
+  message(FATAL_ERROR "SOURCE_DIR not given")
+endif()
+
+# ---- ITK's type variables (a subset: what .wrap files of this module may use) ----------
+set(ITK_WRAP_IMAGE_DIMS 2 3)
+set(ITK_WRAP_unsigned_char ON)
+set(ITK_WRAP_signed_short ON)
+set(ITK_WRAP_float ON)
+set(ITK_WRAP_double OFF)
+set(WRAP_ITK_SCALAR UC SS F)
+set(WRAP_ITK_INT UC SS)
+set(WRAP_ITK_REAL F)
+set(_vu_types "UC|unsigned char" "SS|signed short" "US|unsigned short" "F|float" "D|double" "B|bool"
+  "UL|unsigned long" "SI|signed int" "UI|unsigned int" "IT|itk::IdentifierType")
+foreach(_pair ${_vu_types})
+  string(REPLACE "|" ";" _pair "${_pair}")
+  list(GET _pair 0 _m)
+  list(GET _pair 1 _t)
+  set(ITKM_${_m} ${_m})
+  set(ITKT_${_m} "${_t}")
+  foreach(_d 2 3 4)
+    set(ITKM_I${_m}${_d} "I${_m}${_d}")
+    set(ITKT_I${_m}${_d} "itk::Image< ${_t},${_d} >")
+  endforeach()
+endforeach()
+
+# ---- stand-ins for ITK's wrapping macros ------------------------------------------------
+macro(UNIQUE _var _list)
+  set(${_var} ${_list})
+  list(REMOVE_DUPLICATES ${_var})
+endmacro()
+macro(itk_wrap_include _header)
+  string(APPEND VU_SOURCE "#include \"${_header}\"\n")
+endmacro()
+macro(vu_auto_include _class)
+  if(WRAPPER_AUTO_INCLUDE_HEADERS)
+    string(REGEX REPLACE ".*::" "" _vu_base "${_class}")
+    string(APPEND VU_SOURCE "#include \"itk${_vu_base}.h\"\n")
+  endif()
+endmacro()
+macro(itk_wrap_class _class)
+  set(VU_CLASS "${_class}")
+  list(APPEND VU_CLASSES "${_class}")
+  vu_auto_include("${_class}")
+endmacro()
+macro(itk_wrap_named_class _class _name)
+  itk_wrap_class("${_class}")
+endmacro()
+macro(itk_wrap_template _mangle _types)
+  string(APPEND VU_INSTANTIATIONS "template class ${VU_CLASS}< ${_types} >; // ${_mangle}\n")
+endmacro()
+macro(itk_end_wrap_class)
+  set(VU_CLASS "")
+endmacro()
+macro(itk_wrap_simple_class _class)
+  list(APPEND VU_CLASSES "${_class}")
+  vu_auto_include("${_class}")
+  string(APPEND VU_INSTANTIATIONS "static_assert(sizeof(${_class}) > 0, \"${_class}\");\n")
+endmacro()
+macro(itk_wrap_filter_dims _var _dims)
+  set(${_var} ${ITK_WRAP_IMAGE_DIMS})
+endmacro()
+
+function(vu_read_wrap_file _file _source_var _classes_var)
+  set(VU_SOURCE "")
+  set(VU_INSTANTIATIONS "")
+  set(VU_CLASSES "")
+  set(WRAPPER_AUTO_INCLUDE_HEADERS ON)
+  include(${SOURCE_DIR}/wrapping/VirtualUnwrappingWrapTypes.cmake)
+  include(${_file})
+  set(${_source_var} "${VU_SOURCE}\n${VU_INSTANTIATIONS}\nint main() { return 0; }\n" PARENT_SCOPE)
+  set(${_classes_var} "${VU_CLASSES}" PARENT_SCOPE)
+endfunction()
+
+if(MODE STREQUAL "classes")
+  file(GLOB _wraps ${SOURCE_DIR}/wrapping/*.wrap)
+  set(_wrapped "")
+  foreach(_w ${_wraps})
+    vu_read_wrap_file(${_w} _src _classes)
+    list(APPEND _wrapped ${_classes})
+  endforeach()
+  # Public classes: ITK objects (itkNewMacro) and enumeration holders of include/.
+  file(GLOB _headers ${SOURCE_DIR}/include/*.h)
+  set(_public "")
+  set(_declared "")
+  foreach(_h ${_headers})
+    file(READ ${_h} _text)
+    string(REGEX MATCHALL "\nclass [A-Za-z_]*_EXPORT [A-Za-z]+|\nclass [A-Za-z]+" _decls "${_text}")
+    foreach(_d ${_decls})
+      string(REGEX REPLACE ".* " "" _name "${_d}")
+      list(APPEND _declared "itk::${_name}")
+    endforeach()
+    # Cut the header at each class declaration; a class is public when its own part holds
+    # itkNewMacro(Self) (an ITK object) or when it is an ...Enums holder.
+    string(REGEX REPLACE "[][;]" "|" _text "${_text}")
+    string(REGEX REPLACE "\nclass (VirtualUnwrapping_EXPORT|ITK_TEMPLATE_EXPORT) " ";@" _parts "${_text}")
+    list(REMOVE_AT _parts 0)
+    foreach(_part ${_parts})
+      string(REGEX MATCH "^@[A-Za-z]+" _name "${_part}")
+      string(SUBSTRING "${_name}" 1 -1 _name)
+      if(_part MATCHES "itkNewMacro\\(Self\\)" OR _name MATCHES "Enums$")
+        list(APPEND _public "itk::${_name}")
+      endif()
+    endforeach()
+  endforeach()
+  list(REMOVE_DUPLICATES _public)
+  set(_missing "")
+  foreach(_c ${_public})
+    if(NOT _c IN_LIST _wrapped)
+      list(APPEND _missing ${_c})
+    endif()
+  endforeach()
+  list(LENGTH _public _n)
+  if(_missing)
+    string(REPLACE ";" ", " _missing "${_missing}")
+    message(FATAL_ERROR "public classes without a .wrap entry: ${_missing}")
+  endif()
+  # Classes of this module named by .wrap files must exist in include/ (ITK's own classes,
+  # the wrapped bases, are checked by compiling).
+  foreach(_c ${_wrapped})
+    string(REGEX REPLACE "^itk::" "" _base "${_c}")
+    if(NOT EXISTS ${SOURCE_DIR}/include/itk${_base}.h AND NOT _c IN_LIST _declared
+       AND NOT _c MATCHES "^itk::(ImageToMeshFilter|MeshToMeshFilter)$")
+      message(FATAL_ERROR ".wrap entry ${_c} is not declared in include/")
+    endif()
+  endforeach()
+  message(STATUS "${_n} public classes, all wrapped: ${_public}")
+  return()
+endif()
+
+if(MODE STREQUAL "instantiate")
+  foreach(_v WRAP_FILE OUTPUT_DIR CXX FLAGS_FILE)
+    if(NOT ${_v})
+      message(FATAL_ERROR "${_v} not given")
+    endif()
+  endforeach()
+  vu_read_wrap_file(${WRAP_FILE} _source _classes)
+  get_filename_component(_name ${WRAP_FILE} NAME_WE)
+  file(MAKE_DIRECTORY ${OUTPUT_DIR})
+  set(_cxx ${OUTPUT_DIR}/${_name}WrapCheck.cxx)
+  file(WRITE ${_cxx} "// Generated from ${WRAP_FILE} by VirtualUnwrappingWrapCheck.cmake\n${_source}")
+  file(STRINGS ${FLAGS_FILE} _flags)
+  execute_process(COMMAND ${CXX} ${_flags} -std=c++17 -fsyntax-only ${_cxx}
+    RESULT_VARIABLE _rc OUTPUT_VARIABLE _out ERROR_VARIABLE _err)
+  if(EXPECT_FAILURE)
+    if(_rc EQUAL 0)
+      message(FATAL_ERROR "${_name}: expected the instantiations to fail to compile, they compiled")
+    endif()
+    if(NOT _err MATCHES "${EXPECT_FAILURE}")
+      message(FATAL_ERROR "${_name}: the compile failed without naming ${EXPECT_FAILURE}:\n${_err}")
+    endif()
+    message(STATUS "${_name}: refused as expected (${EXPECT_FAILURE})")
+    return()
+  endif()
+  if(NOT _rc EQUAL 0)
+    string(REGEX MATCH "[^\n]*error:[^\n]*" _first "${_err}")
+    message(FATAL_ERROR "${_name}.wrap asks for something that does not compile: ${_first}\n"
+      "(source ${_cxx})\n${_err}")
+  endif()
+  string(REGEX MATCHALL "template class|static_assert" _n "${_source}")
+  list(LENGTH _n _n)
+  message(STATUS "${_name}.wrap: ${_n} instantiations compile")
+  return()
+endif()
+
+message(FATAL_ERROR "MODE must be classes or instantiate")
