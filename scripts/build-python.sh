@@ -8,18 +8,21 @@
 # Everything goes under VU_ITK_PYTHON_ROOT (default /var/cache/virtual-unwrapping/itk-python):
 #   src/          Debian source package insighttoolkit5 (5.2.1)
 #   itk-build/    ITK build tree with ITK_WRAP_PYTHON=ON (about 2 GB; reused by later runs)
-#   module-build/ this module built against itk-build, with its Python wrapping
+#   module-build-<hash>/ this module (one per source tree) built against itk-build, with
+#                 its Python wrapping
 #   times.log     wall time of each stage
 # The ITK build takes one to two hours on two cores; it is incremental, so an interrupted
 # run continues where it stopped. scripts/run-tests.sh runs the Python tests whenever
-# module-build exists.
+# the ITK build is complete.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 root="${VU_ITK_PYTHON_ROOT:-/var/cache/virtual-unwrapping/itk-python}"
 src_dir="$root/src/insighttoolkit5-5.2.1"
 itk_build="$root/itk-build"
-module_build="$root/module-build"
+# One module build per source tree (a clone configures its own against the shared ITK).
+module_build="$root/module-build-$(printf '%s' "$here" | md5sum | cut -c1-8)"
+tool="${BUILD_DIR:-$here/build}/bin/virtual-unwrap"
 python=/usr/bin/python3
 jobs="${VU_JOBS:-$(nproc)}"
 only_tests=0
@@ -122,8 +125,10 @@ configure_itk() {
 }
 
 build_itk() {
+  rm -f "$itk_build/.vu-build-complete"
   make -C "$itk_build" -j"$jobs" >"$root/itk-build.log" 2>&1 ||
     die "ITK build failed; see $root/itk-build.log (rerun this script to continue)"
+  touch "$itk_build/.vu-build-complete"
 }
 
 build_module() {
@@ -131,6 +136,8 @@ build_module() {
     -DCMAKE_BUILD_TYPE=Release \
     -DITK_DIR="$itk_build" \
     -DBUILD_TESTING=ON \
+    -DVirtualUnwrapping_WRAPPING_TESTS_ONLY=ON \
+    -DVirtualUnwrapping_TOOL="$tool" \
     -DPython3_EXECUTABLE="$python" >"$root/module-configure.log" 2>&1 ||
     die "module configure failed; see $root/module-configure.log"
   cmake --build "$module_build" -j"$jobs" >"$root/module-build.log" 2>&1 ||
@@ -138,7 +145,7 @@ build_module() {
 }
 
 run_python_tests() {
-  (cd "$module_build" && ctest -L Python --output-on-failure) || die "Python tests failed"
+  (cd "$module_build" && ctest -R Python --output-on-failure) || die "Python tests failed"
 }
 
 install_packages
@@ -148,7 +155,11 @@ if ((!only_tests)); then
   timed configure-itk configure_itk
   timed build-itk build_itk
 fi
-[[ -f "$itk_build/ITKConfig.cmake" ]] || die "no ITK build in $itk_build; run without --tests first"
+[[ -f "$itk_build/.vu-build-complete" ]] || die "no finished ITK build in $itk_build; run without --tests first"
+if [[ ! -x "$tool" ]]; then
+  log "building the C++ tool the pipeline test compares with ($tool)"
+  source "$here/scripts/setup.sh"
+fi
 timed build-module build_module
 timed python-tests run_python_tests
 du -sh "$itk_build" "$module_build" | sed 's/^/[build-python] disk: /'
