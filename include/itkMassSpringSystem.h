@@ -348,7 +348,11 @@ private:
   void
   Accelerations(const double * x, const double * v, double * a);
   void
-  ApplyConstraintsAndCollisions(double * x, double * v) const;
+  ApplyConstraintsAndCollisions(double * x, double * v);
+  double
+  RestingSpeed() const;
+  void
+  StepEulerFused(bool symplectic);
   void
   CheckDivergence();
   void

@@ -344,6 +344,79 @@ MassSpringSystem::ParallelFor(size_t n, const std::function<void(size_t, size_t)
     nullptr);
 }
 
+namespace {
+// Spring force on particle i gathered over its neighbours (Hooke, plus spring damping along
+// the spring when cs > 0): the one force kernel of every explicit path.
+template <typename TNeighbour>
+inline void
+GatherSpringForce(size_t             i,
+                  const double *     x,
+                  const double *     v,
+                  const uint64_t *   start,
+                  const TNeighbour * adjacency,
+                  double             cs,
+                  double             f[3])
+{
+  const double xi0 = x[3 * i], xi1 = x[3 * i + 1], xi2 = x[3 * i + 2];
+  double       f0 = 0.0, f1 = 0.0, f2 = 0.0;
+  for (uint64_t e = start[i]; e < start[i + 1]; ++e)
+  {
+    const TNeighbour & nb = adjacency[e];
+    const double *     xj = x + 3 * nb.other;
+    const double       d0 = xj[0] - xi0, d1 = xj[1] - xi1, d2 = xj[2] - xi2;
+    const double       len2 = d0 * d0 + d1 * d1 + d2 * d2;
+    if (len2 <= 0.0)
+    {
+      continue;
+    }
+    const double len = std::sqrt(len2);
+    double       scale = nb.stiffness * (len - nb.restLength) / len;
+    if (cs > 0.0)
+    {
+      const double * vj = v + 3 * nb.other;
+      const double * vi = v + 3 * i;
+      scale += cs * nb.stiffness * ((vj[0] - vi[0]) * d0 + (vj[1] - vi[1]) * d1 + (vj[2] - vi[2]) * d2) / len2;
+    }
+    f0 += scale * d0;
+    f1 += scale * d1;
+    f2 += scale * d2;
+  }
+  f[0] = f0;
+  f[1] = f1;
+  f[2] = f2;
+}
+
+// The collision plane for one particle: pushed back onto the plane, and the paper's
+// response V_new = V_old - (1 + k_r)(V_old . N) N; a rebound slower than restingSpeed
+// comes to rest instead (it would only start an endless micro-bounce).
+inline void
+CollideWithPlane(double *     xi,
+                 double *     vi,
+                 const double point[3],
+                 const double N[3],
+                 double       restitution,
+                 double       restingSpeed)
+{
+  const double depth = (xi[0] - point[0]) * N[0] + (xi[1] - point[1]) * N[1] + (xi[2] - point[2]) * N[2];
+  if (depth < 0.0)
+  {
+    for (int d = 0; d < 3; ++d)
+    {
+      xi[d] -= depth * N[d];
+    }
+    const double vn = vi[0] * N[0] + vi[1] * N[1] + vi[2] * N[2];
+    if (vn < 0.0)
+    {
+      const double rebound = -restitution * vn <= restingSpeed ? 0.0 : restitution;
+      for (int d = 0; d < 3; ++d)
+      {
+        vi[d] -= (1.0 + rebound) * vn * N[d];
+      }
+    }
+  }
+}
+} // namespace
+
 void
 MassSpringSystem::Accelerations(const double * x, const double * v, double * a)
 {
@@ -367,34 +440,13 @@ MassSpringSystem::Accelerations(const double * x, const double * v, double * a)
         ai[0] = ai[1] = ai[2] = 0.0;
         continue;
       }
-      const double xi0 = x[3 * i], xi1 = x[3 * i + 1], xi2 = x[3 * i + 2];
-      const double vi0 = v[3 * i], vi1 = v[3 * i + 1], vi2 = v[3 * i + 2];
-      double       f0 = 0.0, f1 = 0.0, f2 = 0.0;
-      for (uint64_t e = start[i]; e < start[i + 1]; ++e)
-      {
-        const Neighbour & nb = adjacency[e];
-        const double *    xj = x + 3 * nb.other;
-        const double      d0 = xj[0] - xi0, d1 = xj[1] - xi1, d2 = xj[2] - xi2;
-        const double      len2 = d0 * d0 + d1 * d1 + d2 * d2;
-        if (len2 <= 0.0)
-        {
-          continue;
-        }
-        const double len = std::sqrt(len2);
-        double       scale = nb.stiffness * (len - nb.restLength) / len;
-        if (cs > 0.0)
-        {
-          const double * vj = v + 3 * nb.other;
-          scale += cs * nb.stiffness * ((vj[0] - vi0) * d0 + (vj[1] - vi1) * d1 + (vj[2] - vi2) * d2) / len2;
-        }
-        f0 += scale * d0;
-        f1 += scale * d1;
-        f2 += scale * d2;
-      }
+      double f[3];
+      GatherSpringForce(i, x, v, start, adjacency, cs, f);
       const double invM = 1.0 / masses[i];
-      ai[0] = f0 * invM + g[0] - c * vi0;
-      ai[1] = f1 * invM + g[1] - c * vi1;
-      ai[2] = f2 * invM + g[2] - c * vi2;
+      for (int d = 0; d < 3; ++d)
+      {
+        ai[d] = f[d] * invM + g[d] - c * v[3 * i + d];
+      }
     }
   });
   ++m_ForceEvaluations;
@@ -414,49 +466,103 @@ MassSpringSystem::ComputeAccelerations(const std::vector<double> & x,
 }
 
 void
-MassSpringSystem::ApplyConstraintsAndCollisions(double * x, double * v) const
+MassSpringSystem::ApplyConstraintsAndCollisions(double * x, double * v)
 {
-  const size_t n = m_Masses.size();
-  for (size_t i = 0; i < n; ++i)
-  {
-    if (m_Locked[i])
+  const uint8_t * locked = m_Locked.data();
+  const bool      hasPlane = m_HasPlane;
+  const double    point[3] = { m_PlanePoint[0], m_PlanePoint[1], m_PlanePoint[2] };
+  const double    N[3] = { m_PlaneNormal[0], m_PlaneNormal[1], m_PlaneNormal[2] };
+  const double    restitution = m_Restitution;
+  const double    restingSpeed = RestingSpeed();
+  ParallelFor(m_Masses.size(), [=](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
     {
-      v[3 * i] = v[3 * i + 1] = v[3 * i + 2] = 0.0;
+      if (locked[i])
+      {
+        v[3 * i] = v[3 * i + 1] = v[3 * i + 2] = 0.0;
+      }
+      else if (hasPlane)
+      {
+        CollideWithPlane(x + 3 * i, v + 3 * i, point, N, restitution, restingSpeed);
+      }
     }
-  }
-  if (!m_HasPlane)
-  {
-    return;
-  }
+  });
+}
+
+double
+MassSpringSystem::RestingSpeed() const
+{
+  // A rebound slower than what gravity adds in two steps comes to rest on the plane.
   const Vector3 & N = m_PlaneNormal;
-  // Resting contact: a rebound slower than what gravity adds in two steps would only start
-  // an endless micro-bounce, so such particles come to rest on the plane.
-  const double restingSpeed =
-    2.0 * m_TimeStep * std::abs(m_Gravity[0] * N[0] + m_Gravity[1] * N[1] + m_Gravity[2] * N[2]);
-  for (size_t i = 0; i < n; ++i)
+  return 2.0 * m_TimeStep * std::abs(m_Gravity[0] * N[0] + m_Gravity[1] * N[1] + m_Gravity[2] * N[2]);
+}
+
+void
+MassSpringSystem::StepEulerFused(bool symplectic)
+{
+  // One parallel pass per step: force, velocity and position of each particle, with its
+  // lock and collision, into a second position buffer (neighbours read the old positions),
+  // then the buffers swap. Used when no force reads the neighbours' velocities.
+  if (!m_AdjacencyValid)
   {
-    double *     xi = x + 3 * i;
-    double *     vi = v + 3 * i;
-    const double depth =
-      (xi[0] - m_PlanePoint[0]) * N[0] + (xi[1] - m_PlanePoint[1]) * N[1] + (xi[2] - m_PlanePoint[2]) * N[2];
-    if (depth < 0.0 && !m_Locked[i])
+    BuildAdjacency();
+  }
+  std::vector<double> & next = m_Scratch[1];
+  next.resize(m_X.size());
+  const double *    x = m_X.data();
+  double *          xn = next.data();
+  double *          v = m_V.data();
+  const double      h = m_TimeStep;
+  const double      c = m_Damping;
+  const Vector3     g = m_Gravity;
+  const uint64_t *  start = m_AdjacencyStart.data();
+  const Neighbour * adjacency = m_Adjacency.data();
+  const double *    masses = m_Masses.data();
+  const uint8_t *   locked = m_Locked.data();
+  const bool        hasPlane = m_HasPlane;
+  const double      point[3] = { m_PlanePoint[0], m_PlanePoint[1], m_PlanePoint[2] };
+  const double      N[3] = { m_PlaneNormal[0], m_PlaneNormal[1], m_PlaneNormal[2] };
+  const double      restitution = m_Restitution;
+  const double      restingSpeed = RestingSpeed();
+  ParallelFor(m_Masses.size(), [=](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i)
     {
+      double *       vi = v + 3 * i;
+      double *       xni = xn + 3 * i;
+      const double * xi = x + 3 * i;
+      if (locked[i])
+      {
+        vi[0] = vi[1] = vi[2] = 0.0;
+        xni[0] = xi[0];
+        xni[1] = xi[1];
+        xni[2] = xi[2];
+        continue;
+      }
+      double f[3];
+      GatherSpringForce(i, x, v, start, adjacency, 0.0, f);
+      const double invM = 1.0 / masses[i];
       for (int d = 0; d < 3; ++d)
       {
-        xi[d] -= depth * N[d];
-      }
-      const double vn = vi[0] * N[0] + vi[1] * N[1] + vi[2] * N[2];
-      if (vn < 0.0)
-      {
-        // The paper's collision response: V_new = V_old - (1 + k_r)(V_old . N) N.
-        const double rebound = -m_Restitution * vn <= restingSpeed ? 0.0 : m_Restitution;
-        for (int d = 0; d < 3; ++d)
+        const double a = f[d] * invM + g[d] - c * vi[d];
+        if (symplectic)
         {
-          vi[d] -= (1.0 + rebound) * vn * N[d];
+          vi[d] += h * a;
+          xni[d] = xi[d] + h * vi[d];
+        }
+        else
+        {
+          xni[d] = xi[d] + h * vi[d];
+          vi[d] += h * a;
         }
       }
+      if (hasPlane)
+      {
+        CollideWithPlane(xni, vi, point, N, restitution, restingSpeed);
+      }
     }
-  }
+  });
+  ++m_ForceEvaluations;
+  m_X.swap(next);
 }
 
 void
@@ -474,38 +580,53 @@ MassSpringSystem::StepExplicit()
   switch (m_Integrator)
   {
     case MassSpringIntegratorEnum::ExplicitEuler:
-      Accelerations(x, v, a1);
-      for (size_t k = 0; k < n3; ++k)
-      {
-        x[k] += h * v[k];
-        v[k] += h * a1[k];
-      }
-      break;
     case MassSpringIntegratorEnum::SymplecticEuler:
-      Accelerations(x, v, a1);
-      for (size_t k = 0; k < n3; ++k)
+    {
+      const bool symplectic = m_Integrator == MassSpringIntegratorEnum::SymplecticEuler;
+      if (m_SpringDamping <= 0.0)
       {
-        v[k] += h * a1[k];
-        x[k] += h * v[k];
+        StepEulerFused(symplectic);
+        return;
       }
+      Accelerations(x, v, a1);
+      ParallelFor(n3 / 3, [=](size_t begin, size_t end) {
+        for (size_t k = 3 * begin; k < 3 * end; ++k)
+        {
+          if (symplectic)
+          {
+            v[k] += h * a1[k];
+            x[k] += h * v[k];
+          }
+          else
+          {
+            x[k] += h * v[k];
+            v[k] += h * a1[k];
+          }
+        }
+      });
       break;
+    }
     case MassSpringIntegratorEnum::Midpoint:
     {
       double * xm = m_Scratch[1].data();
       double * vm = m_Scratch[2].data();
       double * a2 = m_Scratch[3].data();
       Accelerations(x, v, a1);
-      for (size_t k = 0; k < n3; ++k)
-      {
-        xm[k] = x[k] + 0.5 * h * v[k];
-        vm[k] = v[k] + 0.5 * h * a1[k];
-      }
+      ParallelFor(n3 / 3, [=](size_t begin, size_t end) {
+        for (size_t k = 3 * begin; k < 3 * end; ++k)
+        {
+          xm[k] = x[k] + 0.5 * h * v[k];
+          vm[k] = v[k] + 0.5 * h * a1[k];
+        }
+      });
       Accelerations(xm, vm, a2);
-      for (size_t k = 0; k < n3; ++k)
-      {
-        x[k] += h * vm[k];
-        v[k] += h * a2[k];
-      }
+      ParallelFor(n3 / 3, [=](size_t begin, size_t end) {
+        for (size_t k = 3 * begin; k < 3 * end; ++k)
+        {
+          x[k] += h * vm[k];
+          v[k] += h * a2[k];
+        }
+      });
       break;
     }
     case MassSpringIntegratorEnum::RungeKutta4:
@@ -518,29 +639,37 @@ MassSpringSystem::StepExplicit()
       double * v2 = m_Scratch[6].data();
       double * v3 = m_Scratch[7].data();
       Accelerations(x, v, a1);
-      for (size_t k = 0; k < n3; ++k)
-      {
-        v2[k] = v[k] + 0.5 * h * a1[k];
-        xs[k] = x[k] + 0.5 * h * v[k];
-      }
+      ParallelFor(n3 / 3, [=](size_t begin, size_t end) {
+        for (size_t k = 3 * begin; k < 3 * end; ++k)
+        {
+          v2[k] = v[k] + 0.5 * h * a1[k];
+          xs[k] = x[k] + 0.5 * h * v[k];
+        }
+      });
       Accelerations(xs, v2, a2);
-      for (size_t k = 0; k < n3; ++k)
-      {
-        v3[k] = v[k] + 0.5 * h * a2[k];
-        xs[k] = x[k] + 0.5 * h * v2[k];
-      }
+      ParallelFor(n3 / 3, [=](size_t begin, size_t end) {
+        for (size_t k = 3 * begin; k < 3 * end; ++k)
+        {
+          v3[k] = v[k] + 0.5 * h * a2[k];
+          xs[k] = x[k] + 0.5 * h * v2[k];
+        }
+      });
       Accelerations(xs, v3, a3);
-      for (size_t k = 0; k < n3; ++k)
-      {
-        vs[k] = v[k] + h * a3[k];
-        xs[k] = x[k] + h * v3[k];
-      }
+      ParallelFor(n3 / 3, [=](size_t begin, size_t end) {
+        for (size_t k = 3 * begin; k < 3 * end; ++k)
+        {
+          vs[k] = v[k] + h * a3[k];
+          xs[k] = x[k] + h * v3[k];
+        }
+      });
       Accelerations(xs, vs, a4);
-      for (size_t k = 0; k < n3; ++k)
-      {
-        x[k] += h / 6.0 * (v[k] + 2.0 * v2[k] + 2.0 * v3[k] + vs[k]);
-        v[k] += h / 6.0 * (a1[k] + 2.0 * a2[k] + 2.0 * a3[k] + a4[k]);
-      }
+      ParallelFor(n3 / 3, [=](size_t begin, size_t end) {
+        for (size_t k = 3 * begin; k < 3 * end; ++k)
+        {
+          x[k] += h / 6.0 * (v[k] + 2.0 * v2[k] + 2.0 * v3[k] + vs[k]);
+          v[k] += h / 6.0 * (a1[k] + 2.0 * a2[k] + 2.0 * a3[k] + a4[k]);
+        }
+      });
       break;
     }
     case MassSpringIntegratorEnum::ImplicitEuler:
