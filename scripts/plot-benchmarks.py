@@ -7,6 +7,10 @@ flattening*.csv -> docs/images/pareto.png: wall time against edge strain p95 for
 method and setting, one panel per mesh (failed or diverged runs marked on the top edge).
 stability.csv   -> docs/images/stability.png: measured largest stable time step of each
 explicit integrator against w_max, with the linear-analysis bounds as lines.
+enough-model.csv -> docs/images/enough-model.png: texture NCC, OCR character error rate
+and unwrapping time against mesh spacing, and for each physics variant.
+step-throughput.csv, flattening-1M.csv, flattening.csv -> docs/images/scaling.png: time
+per explicit step, spring evaluations per second and time to convergence against size.
 """
 import csv
 import glob
@@ -90,5 +94,52 @@ def stability():
     fig.savefig(os.path.join(images, "stability.png"), dpi=90)
 
 
+
+def enough_model():
+    results = rows("enough-model.csv")
+    if not results:
+        return
+    fig, (left, right) = plt.subplots(1, 2, figsize=(13, 4.6), gridspec_kw={"width_ratios": [1, 1.25]})
+    sweep = sorted((r for r in results if r["sweep"] == "mesh spacing"), key=lambda r: float(r["mesh_spacing_mm"]))
+    x = [float(r["mesh_spacing_mm"]) for r in sweep]
+    left.plot(x, [float(r["texture_ncc"]) for r in sweep], "o-", label="texture NCC")
+    left.plot(x, [1.0 - float(r["character_error_rate"]) for r in sweep], "s--", label="1 - OCR character error rate")
+    for r in sweep:
+        if r["setting"] == "auto":
+            left.axvline(float(r["mesh_spacing_mm"]), color="grey", lw=0.8, ls=":")
+            left.annotate("automatic", (float(r["mesh_spacing_mm"]), 0.05), rotation=90, color="grey", fontsize=8)
+    left.set_xscale("log")
+    left.set_ylim(0, 1.02)
+    left.set_xlabel("mesh spacing (mm; voxel 0.1 mm)")
+    left.set_ylabel("legibility")
+    twin = left.twinx()
+    twin.plot(x, [float(r["unwrap_seconds"]) for r in sweep], "^:", color="tab:red", label="unwrap time")
+    twin.set_ylabel("unwrap time without scoring (s)", color="tab:red")
+    left.legend(loc="lower left", fontsize=8)
+    left.set_title("standard phantom: legibility against mesh spacing")
+    physics = [r for r in results if r["sweep"] == "physics"]
+    names = [r["setting"] for r in physics]
+    y = range(len(physics))
+    right.barh([i + 0.2 for i in y], [float(r["texture_ncc"]) for r in physics], height=0.4, label="texture NCC")
+    right.barh([i - 0.2 for i in y], [1.0 - float(r["character_error_rate"]) for r in physics], height=0.4,
+               label="1 - OCR character error rate")
+    for i, r in enumerate(physics):
+        right.annotate(f"{float(r['flatten_seconds']):.1f} s, p95 {float(r['edge_strain_p95']):.1%}, "
+                       f"{r['flipped_triangles']} flips", (1.02, i), fontsize=7, va="center",
+                       annotation_clip=False)
+    right.set_yticks(list(y))
+    right.set_yticklabels(names, fontsize=8)
+    right.invert_yaxis()
+    right.set_xlim(0, 1.6)
+    right.set_xticks([0, 0.2, 0.4, 0.6, 0.8, 1.0])
+    right.axvline(1.0, color="grey", lw=0.6)
+    right.set_xlabel("legibility (annotations: flatten time, edge strain p95, flipped triangles)")
+    right.legend(loc="lower right", fontsize=7)
+    right.set_title("which physics is needed (automatic spacing)")
+    fig.tight_layout()
+    fig.savefig(os.path.join(images, "enough-model.png"), dpi=90)
+
+
 pareto()
 stability()
+enough_model()
