@@ -234,7 +234,7 @@ main(int argc, char * argv[])
           [&](double h) {
             itk::MassSpringSystem system;
             itk::MassSpringSheetFlattener::BuildSystem(mesh, parameters, system);
-            std::mt19937                           random(7);
+            std::mt19937 random(7);
             // A small perturbation keeps the run in the linear regime the bound speaks of:
             // at 5% of the spacing, an unstable mode saturates by geometric non-linearity
             // (energy transfers to rotations) before it looks like divergence.
