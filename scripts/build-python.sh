@@ -94,6 +94,34 @@ itk_modules() {
   echo ITKBridgeNumPy
 }
 
+# The ITK modules wrapped for Python: what a user of this module touches (images, meshes,
+# IO, numpy bridge, the transforms and interpolators of the wrapped API, FlipImageFilter
+# and CastImageFilter) and what their wrapping needs. The other modules this module links
+# are built but not wrapped: wrapping all of them (registration, metrics, optimizers,
+# morphology, label maps...) would take several times longer.
+VU_WRAPPED_ITK_MODULES="ITKPyBase ITKPyUtils ITKCommon ITKStatistics ITKImageFilterBase ITKTransform
+  ITKImageFunction ITKImageGrid ITKImageSources ITKMesh ITKQuadEdgeMesh ITKBridgeNumPy ITKTestKernel
+  ITKIOImageBase ITKIOBMP ITKIOGDCM ITKIOGIPL ITKIOJPEG ITKIOMeta ITKIONIFTI ITKIONRRD ITKIOPNG ITKIOTIFF
+  ITKIOVTK ITKIOMeshBase ITKIOMeshBYU ITKIOMeshFreeSurfer ITKIOMeshGifti ITKIOMeshOBJ ITKIOMeshOFF ITKIOMeshVTK"
+
+restrict_wrapping() {
+  # ITK wraps every enabled module that has a wrapping/ directory; set the others aside.
+  local file name dir changed=0
+  while IFS= read -r file; do
+    dir="$(dirname "$file")"
+    name="$(sed -n 's/^ *itk_module( *\([A-Za-z0-9]*\).*/\1/p' "$file" | head -1)"
+    [[ -n "$name" && -d "$dir/wrapping" ]] || continue
+    if ! grep -qw "$name" <<<"$VU_WRAPPED_ITK_MODULES"; then
+      mv "$dir/wrapping" "$dir/wrapping.vu-not-wrapped"
+      changed=1
+    fi
+  done < <(find "$src_dir/Modules" -name itk-module.cmake)
+  if ((changed)) && [[ -f "$itk_build/CMakeCache.txt" ]]; then
+    log "wrapping restricted to the modules this module needs: reconfiguring"
+    cmake "$itk_build" >>"$root/itk-configure.log" 2>&1 || die "ITK reconfigure failed; see $root/itk-configure.log"
+  fi
+}
+
 configure_itk() {
   [[ -f "$itk_build/CMakeCache.txt" ]] && return 0
   local args=() m
@@ -152,6 +180,7 @@ install_packages
 if ((!only_tests)); then
   timed fetch-source fetch_source
   patch_source
+  restrict_wrapping
   timed configure-itk configure_itk
   timed build-itk build_itk
 fi
