@@ -140,6 +140,54 @@ def enough_model():
     fig.savefig(os.path.join(images, "enough-model.png"), dpi=90)
 
 
+
+def scaling():
+    steps = rows("step-throughput.csv")
+    runs = rows("scaling.csv")
+    if not steps and not runs:
+        return
+    fig, (a, b, c) = plt.subplots(1, 3, figsize=(14, 4.2))
+    for threads in sorted({r["threads"] for r in steps}, key=int):
+        sel = sorted((r for r in steps if r["threads"] == threads), key=lambda r: int(r["particles"]))
+        x = [int(r["particles"]) for r in sel]
+        a.plot(x, [1e3 * float(r["seconds_per_step"]) for r in sel], "o-", label=f"{threads} thread(s)")
+        b.plot(x, [float(r["spring_evaluations_per_second"]) for r in sel], "o-", label=f"{threads} thread(s)")
+    a.set_xscale("log")
+    a.set_yscale("log")
+    a.set_xlabel("particles")
+    a.set_ylabel("ms per explicit step (symplectic Euler)")
+    a.set_title("time per step")
+    a.legend(fontsize=8)
+    b.axhline(5e8, color="grey", ls=":", lw=1)
+    b.annotate("target 5e8", (b.get_xlim()[0], 5e8), fontsize=8, color="grey", va="bottom")
+    b.set_xscale("log")
+    b.set_yscale("log")
+    b.set_xlabel("particles")
+    b.set_ylabel("spring evaluations per second")
+    b.set_title("explicit step throughput")
+    b.legend(fontsize=8)
+    for threads in sorted({r["threads"] for r in runs}, key=int):
+        sel = sorted((r for r in runs if r["threads"] == threads), key=lambda r: int(r["vertices"]))
+        x = [int(r["vertices"]) for r in sel]
+        c.plot(x, [float(r["seconds"]) for r in sel], "o-", label=f"time, {threads} thread(s)")
+    if runs:
+        twin = c.twinx()
+        sel = sorted((r for r in runs if r["threads"] == "1"), key=lambda r: int(r["vertices"]))
+        twin.plot([int(r["vertices"]) for r in sel], [float(r["peak_memory_mib"]) for r in sel], "s:",
+                  color="tab:red", label="peak memory")
+        twin.set_yscale("log")
+        twin.set_ylabel("peak memory (MiB)", color="tab:red")
+    c.set_xscale("log")
+    c.set_yscale("log")
+    c.set_xlabel("vertices")
+    c.set_ylabel("seconds to convergence (implicit, default)")
+    c.set_title("flattening to convergence")
+    c.legend(fontsize=8, loc="upper left")
+    fig.tight_layout()
+    fig.savefig(os.path.join(images, "scaling.png"), dpi=90)
+
+
 pareto()
 stability()
 enough_model()
+scaling()

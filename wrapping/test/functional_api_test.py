@@ -34,7 +34,8 @@ assert np.array_equal(itk.array_view_from_image(short_mask) > 0, mask_array > 0)
     abs(int((itk.array_view_from_image(short_mask) > 0).sum()) - int((mask_array > 0).sum())) < 0.01 * mask_array.size
 
 # Mid-surface mesh, each wrapped mesh type.
-for mesh_type in (itk.Mesh[itk.F, 3], itk.Mesh[itk.D, 3], itk.QuadEdgeMesh[itk.D, 3]):
+for label, mesh_type in (("Mesh[F,3]", itk.Mesh[itk.F, 3]), ("Mesh[D,3]", itk.Mesh[itk.D, 3]),
+                         ("QuadEdgeMesh[D,3]", itk.QuadEdgeMesh[itk.D, 3])):
     surface_filter = itk.SheetMidSurfaceMeshFilter[itk.Image[itk.UC, 3], mesh_type].New(
         Input=mask, IntensityImage=volume)
     surface_filter.Update()
@@ -71,7 +72,7 @@ for mesh_type in (itk.Mesh[itk.F, 3], itk.Mesh[itk.D, 3], itk.QuadEdgeMesh[itk.D
     assert np.isfinite(texture[sheet]).all() and np.isnan(texture[~sheet]).all()
     layers = itk.array_view_from_image(texturer.GetLayerStackOutput())
     assert layers.shape[0] == 5
-    print(f"[ figures ] {mesh_type.__name__ if hasattr(mesh_type, '__name__') else mesh_type}: "
+    print(f"[ figures ] {label}: "
           f"{surface.GetNumberOfPoints()} points, strain p95 {distortion.GetEdgeStrainP95():.1e}, "
           f"texture {texture.shape[::-1]}, sheet {sheet.mean():.1%}")
 
