@@ -465,6 +465,24 @@ TextureFidelityCalculator::Compute()
       candidate.Transform = refined;
       candidate.Result = std::move(score);
     }
+    // The shrunk, smoothed levels can lead away from the optimum of the full-resolution
+    // images (fine strokes blur into blobs there): polish the kept transform at the two
+    // finest levels as well.
+    if (refinement.size() > 2)
+    {
+      TransformType::Pointer polished = AlignTexture(reference,
+                                                     textures[candidate.Texture],
+                                                     candidate.Transform,
+                                                     { 2, 1 },
+                                                     Stage::GradientDescent,
+                                                     m_NumberOfIterations);
+      Score                  polishedScore = Evaluate(reference, textures[candidate.Texture], polished);
+      if (polishedScore.NCC > candidate.Result.NCC)
+      {
+        candidate.Transform = polished;
+        candidate.Result = std::move(polishedScore);
+      }
+    }
   }
   const Candidate & best =
     *std::max_element(candidates.begin(), candidates.end(), [](const Candidate & a, const Candidate & b) {
