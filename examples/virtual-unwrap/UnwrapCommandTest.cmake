@@ -39,7 +39,16 @@ file(READ ${WORK}/out/report.json json)
 string(JSON cer GET "${json}" legibility character_error_rate)
 string(JSON ncc GET "${json}" legibility texture_ncc)
 string(JSON p95 GET "${json}" distortion edge_strain p95)
-message(STATUS "${PRESET}: character error rate ${cer}, texture NCC ${ncc}, edge strain p95 ${p95}")
+# The automatic texture choices are recorded: side, core subtraction and every candidate's
+# ink contrast.
+string(JSON side GET "${json}" parameters texture side)
+string(JSON core GET "${json}" parameters texture subtract_core)
+string(JSON candidates LENGTH "${json}" parameters texture selection candidates)
+message(STATUS "${PRESET}: character error rate ${cer}, texture NCC ${ncc}, edge strain p95 ${p95}, "
+  "texture side ${side}, core subtracted ${core}, ${candidates} candidates")
+if(candidates LESS 1)
+  message(FATAL_ERROR "${PRESET}: no texture candidate recorded in report.json")
+endif()
 if(cer GREATER ${MAX_CER} OR ncc LESS ${MIN_NCC})
   message(FATAL_ERROR "${PRESET}: character error rate ${cer} (limit ${MAX_CER}), NCC ${ncc} (limit ${MIN_NCC})")
 endif()
