@@ -399,9 +399,9 @@ TEST(FlattenedTextureImageFilter, AbortStopsTheFilter)
 // ink image. Two things held it at 0.89 with the whole sheet compared:
 // - the sheet's outline: at its ends and long edges the mid-surface meets air, so the
 //   texture has a dark rim (about -400 HU against +250 HU of bare sheet) the ink image
-//   does not, which costs about 0.04 of NCC and pulled the registration to a scale of
-//   0.997. It is not ink, so the comparison leaves out a border of the scanner's blur
-//   reach (BlurFWHM + one voxel) inside the sheet's edge (TextureFidelityCalculator's
+//   does not, which costs 0.03-0.05 of NCC and pulls the registration to a scale of
+//   0.997-0.998. It is not ink, so the comparison leaves out a border of the scanner's
+//   blur reach (BlurFWHM + one voxel) inside the sheet's edge (TextureFidelityCalculator's
 //   BorderWidth);
 // - resolution: the scan is the ink smoothed by the partial-volume splat into 0.1 mm
 //   voxels and a 0.12 mm FWHM Gaussian; the ink image blurred by that Gaussian alone
@@ -477,7 +477,7 @@ TEST(FlattenedTextureImageFilter, StandardRolledPhantomWithTrueFlattening)
   EXPECT_GE(fair->GetNormalizedCrossCorrelation(), 0.95);
   EXPECT_GE(interior->GetNormalizedCrossCorrelation(), 0.93);
   EXPECT_LT(interior->GetNormalizedCrossCorrelation(), ceiling->GetNormalizedCrossCorrelation());
-  EXPECT_GE(whole->GetNormalizedCrossCorrelation(), 0.85);
+  EXPECT_GE(whole->GetNormalizedCrossCorrelation(), 0.90);
   // The true flattening needs no transform.
   EXPECT_FALSE(fair->GetMirrored());
   EXPECT_NEAR(fair->GetScale(), 1.0, 1e-3);

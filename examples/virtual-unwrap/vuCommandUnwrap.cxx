@@ -353,6 +353,18 @@ RunUnwrap(UnwrapOptions & options)
       throw UsageError("--threshold must be a number or auto, not '" + options.Threshold + "'");
     }
   }
+  // Texture options are checked before the long stages; their automatic values need the
+  // scan and the mesh.
+  for (const auto & [value, option] : { std::make_pair(options.Median, "--median"),
+                                        std::make_pair(options.Smooth, "--smooth"),
+                                        std::make_pair(options.DisplayBorder, "--display-border") })
+  {
+    AutoOrLength(value, option, 0.0);
+  }
+  if (options.Side == "auto" && options.Layers > 0 && options.Layers % 2 == 0)
+  {
+    throw UsageError("--side auto splits the layers at the focus: give an odd number of --layers");
+  }
   itk::TextureFidelityCalculator::ImageType::Pointer truthInk;
   std::string                                        truthText;
   if (!options.GroundTruth.empty())
@@ -615,6 +627,7 @@ RunUnwrap(UnwrapOptions & options)
                                { "spacing_along_axis_mm", meshReport.SpacingAlongAxis } } },
                            { "texture",
                              { { "layers", layerCount },
+                               { "layers_combined", vertexLayers },
                                { "layer_spacing_mm", layerSpacing },
                                { "side", SideName(chosen.Side) },
                                { "side_requested", options.Side },
