@@ -30,7 +30,9 @@ namespace itk {
  * \brief Legibility of a flat image of text: what tesseract OCR reads in it and the
  * character error rate (CER) against the known text.
  *
- * Compute() windows the image between its 0.5th and 99.5th percentiles, inverts it when
+ * Compute() windows the image between the 0.5th and 99.5th percentiles of its finite
+ * pixels (non-finite pixels, e.g. NaN off an unwrapped sheet, take the median of the finite
+ * ones, the background where ink covers a minority), inverts it when
  * InkIsBright (CT ink is denser, hence brighter, than the sheet) so that the text is dark
  * on white, enlarges it by UpscaleFactor (linear interpolation), pads a white border of
  * 16 pixels, writes a temporary 8-bit PNG and runs
@@ -48,7 +50,7 @@ namespace itk {
  * PageSegmentationMode (6: a single uniform block of text; 0..13), Language ("eng"),
  * TesseractExecutable ("tesseract", looked up on PATH unless it contains a '/'),
  * TruthText ("": when empty Compute() only recognises).
- * Compute() throws itk::ExceptionObject when there is no image, when tesseract is not
+ * Compute() throws itk::ExceptionObject when there is no image or no finite pixel, when tesseract is not
  * installed (naming the Debian packages to install) or when it fails.
  *
  * Reference: R. Smith, "An overview of the Tesseract OCR engine", ICDAR 2007.

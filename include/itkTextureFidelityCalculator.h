@@ -61,10 +61,16 @@ namespace itk {
  * - AllowQuarterTurns (true): start from 0, 90, 180 and 270 degrees, else from 0 only;
  * - CoarseSize (64; 16 .. 4096): pixels along the reference's longer side at the coarse
  *   level (the shrink factor follows from it);
- * - NumberOfIterations (100; >= 1): optimizer iterations per level.
+ * - NumberOfIterations (100; >= 1): optimizer iterations per level;
+ * - BorderWidth (0; >= 0, physical units): reference pixels whose centre lies less than
+ *   this far inside the edge of the reference's valid region (taken half a pixel beyond
+ *   the centres of its outermost valid pixels) are left out of the registration metric,
+ *   the NCC and the overlap fraction. The placement of the starts still uses the whole
+ *   valid region. A sheet's own outline (air beside the sheet's edge blurred into the
+ *   texture) is not ink; a border of the scanner's blur reach keeps it out of the measure.
  *
  * Throws itk::ExceptionObject when an image is missing or empty, a mask's size differs
- * from its image, or an image has no valid pixel.
+ * from its image, an image has no valid pixel, or BorderWidth leaves no reference pixel.
  *
  * \ingroup VirtualUnwrapping
  */
@@ -104,6 +110,8 @@ public:
   itkGetConstMacro(CoarseSize, unsigned int);
   itkSetClampMacro(NumberOfIterations, unsigned int, 1, 100000);
   itkGetConstMacro(NumberOfIterations, unsigned int);
+  itkSetClampMacro(BorderWidth, double, 0.0, NumericTraits<double>::max());
+  itkGetConstMacro(BorderWidth, double);
 
   void
   Compute();
@@ -132,6 +140,7 @@ private:
   bool         m_AllowQuarterTurns{ true };
   unsigned int m_CoarseSize{ 64 };
   unsigned int m_NumberOfIterations{ 100 };
+  double       m_BorderWidth{ 0.0 };
 
   double                 m_NormalizedCrossCorrelation{ 0.0 };
   bool                   m_Mirrored{ false };

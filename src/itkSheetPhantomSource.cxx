@@ -507,11 +507,24 @@ SheetPhantomSource::InkImageType::Pointer
 SheetPhantomSource::MakeFibreTexture(bool alongSheet, uint32_t seed) const
 {
   // White noise smoothed much longer along the fibres than across them, scaled to a
-  // standard deviation of FibreContrast.
-  const double                 pixel = 0.5 * std::min(m_VoxelSize, m_SliceSpacing);
+  // standard deviation of FibreContrast. The noise reaches four sigmas beyond the sheet on
+  // every side and is cropped after smoothing: the recursive Gaussian extends an image by
+  // its edge values, which near the edges would weigh a few noise samples heavily and
+  // raise the fibre contrast there several-fold (bands of false density at the sheet's
+  // ends).
+  const double pixel = 0.5 * std::min(m_VoxelSize, m_SliceSpacing);
+  double       sigma[2];
+  sigma[alongSheet ? 0 : 1] = 0.5 * m_FibreLength;
+  sigma[alongSheet ? 1 : 0] = 1.5 * pixel;
+  const SizeValueType sheet[2] = { static_cast<SizeValueType>(std::ceil(m_SheetLength / pixel)) + 1,
+                                   static_cast<SizeValueType>(std::ceil(m_SheetWidth / pixel)) + 1 };
+  SizeValueType       pad[2];
+  for (int d = 0; d < 2; ++d)
+  {
+    pad[d] = static_cast<SizeValueType>(std::ceil(4.0 * sigma[d] / pixel));
+  }
   auto                         noise = InkImageType::New();
-  const InkImageType::SizeType size = { { static_cast<SizeValueType>(std::ceil(m_SheetLength / pixel)) + 1,
-                                          static_cast<SizeValueType>(std::ceil(m_SheetWidth / pixel)) + 1 } };
+  const InkImageType::SizeType size = { { sheet[0] + 2 * pad[0], sheet[1] + 2 * pad[1] } };
   noise->SetRegions(size);
   noise->SetSpacing(pixel);
   noise->Allocate(true);
@@ -521,16 +534,27 @@ SheetPhantomSource::MakeFibreTexture(bool alongSheet, uint32_t seed) const
   random->SetSeed(seed);
   random->SetNumberOfWorkUnits(16);
   auto smooth = SmoothingRecursiveGaussianImageFilter<InkImageType, InkImageType>::New();
-  SmoothingRecursiveGaussianImageFilter<InkImageType>::SigmaArrayType sigma;
-  sigma[alongSheet ? 0 : 1] = 0.5 * m_FibreLength;
-  sigma[alongSheet ? 1 : 0] = 1.5 * pixel;
+  SmoothingRecursiveGaussianImageFilter<InkImageType>::SigmaArrayType sigmas;
+  sigmas[0] = sigma[0];
+  sigmas[1] = sigma[1];
   smooth->SetInput(random->GetOutput());
-  smooth->SetSigmaArray(sigma);
+  smooth->SetSigmaArray(sigmas);
+  smooth->Update();
+  // The sheet's part, with pixel (0, 0) at s = w = 0 again.
+  auto cropped = InkImageType::New();
+  cropped->SetRegions(InkImageType::SizeType{ { sheet[0], sheet[1] } });
+  cropped->SetSpacing(pixel);
+  cropped->Allocate();
+  for (SizeValueType y = 0; y < sheet[1]; ++y)
+  {
+    const float * from = smooth->GetOutput()->GetBufferPointer() + (y + pad[1]) * size[0] + pad[0];
+    std::copy(from, from + sheet[0], cropped->GetBufferPointer() + y * sheet[0]);
+  }
   auto statistics = StatisticsImageFilter<InkImageType>::New();
-  statistics->SetInput(smooth->GetOutput());
+  statistics->SetInput(cropped);
   statistics->Update();
   auto scale = ShiftScaleImageFilter<InkImageType, InkImageType>::New();
-  scale->SetInput(smooth->GetOutput());
+  scale->SetInput(cropped);
   scale->SetShift(-statistics->GetMean());
   scale->SetScale(m_FibreContrast / std::max(statistics->GetSigma(), 1e-12));
   scale->Update();

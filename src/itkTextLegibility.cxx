@@ -27,9 +27,11 @@
 #include "vuUtf8.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <iterator>
 #include <sstream>
 #include <unistd.h>
 
@@ -174,18 +176,37 @@ TextLegibility::Compute()
   }
 
   // A robust window keeps a few bright outliers (noise, metal) from washing out the text.
+  // Non-finite pixels (NaN off an unwrapped sheet) take no part in it and take the median
+  // of the finite ones: the sheet's background, ink covering a minority of it, so that the
+  // sheet's outline does not read as a stroke.
   const float *      buffer = m_Image->GetBufferPointer();
-  std::vector<float> values(buffer, buffer + region.GetNumberOfPixels());
-  const size_t       lowRank = values.size() / 200, highRank = values.size() - 1 - values.size() / 200;
+  std::vector<float> values;
+  values.reserve(region.GetNumberOfPixels());
+  std::copy_if(
+    buffer, buffer + region.GetNumberOfPixels(), std::back_inserter(values), [](float v) { return std::isfinite(v); });
+  if (values.empty())
+  {
+    itkExceptionMacro(<< "the image has no finite pixel");
+  }
+  const size_t lowRank = values.size() / 200, highRank = values.size() - 1 - values.size() / 200;
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  const float background = values[values.size() / 2];
   std::nth_element(values.begin(), values.begin() + lowRank, values.end());
   const float low = values[lowRank];
   std::nth_element(values.begin(), values.begin() + highRank, values.end());
   const float high = std::max(values[highRank], low + 1e-6f);
+  auto        finite = ImageType::New();
+  finite->CopyInformation(m_Image);
+  finite->SetRegions(region);
+  finite->Allocate();
+  std::transform(buffer, buffer + region.GetNumberOfPixels(), finite->GetBufferPointer(), [background](float v) {
+    return std::isfinite(v) ? v : background;
+  });
 
   using OutputImageType = Image<unsigned char, 2>;
   using WindowType = IntensityWindowingImageFilter<ImageType, ImageType>;
   auto window = WindowType::New();
-  window->SetInput(m_Image);
+  window->SetInput(finite);
   window->SetWindowMinimum(low);
   window->SetWindowMaximum(high);
   window->SetOutputMinimum(m_InkIsBright ? 255.0f : 0.0f);

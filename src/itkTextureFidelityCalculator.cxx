@@ -27,6 +27,7 @@
 #include "itkRegistrationParameterScalesFromPhysicalShift.h"
 #include "itkRegularStepGradientDescentOptimizerv4.h"
 #include "itkResampleImageFilter.h"
+#include "itkSignedMaurerDistanceMapImageFilter.h"
 
 #include <algorithm>
 #include <cmath>
@@ -115,6 +116,58 @@ Prepare(const ImageType * image, const MaskType * mask, const char * what)
   prepared.Centroid[1] = centroid[1];
   prepared.Area = valid * image->GetSpacing()[0] * image->GetSpacing()[1];
   return prepared;
+}
+
+// The valid pixels whose centre lies at least `border` inside the edge of the valid
+// region, the edge taken half a pixel beyond the centres of the outermost valid pixels
+// (outside the image counts as invalid).
+MaskType::Pointer
+ErodeMask(const MaskType * mask, double border)
+{
+  const MaskType::RegionType region = mask->GetBufferedRegion();
+  const auto                 size = region.GetSize();
+  // One ring of invalid pixels around the image, so that its border counts as an edge.
+  auto               padded = MaskType::New();
+  MaskType::SizeType paddedSize = { { size[0] + 2, size[1] + 2 } };
+  padded->SetRegions(paddedSize);
+  padded->SetSpacing(mask->GetSpacing());
+  padded->Allocate();
+  padded->FillBuffer(1);
+  const unsigned char * in = mask->GetBufferPointer();
+  unsigned char *       invalid = padded->GetBufferPointer();
+  for (SizeValueType y = 0; y < size[1]; ++y)
+  {
+    for (SizeValueType x = 0; x < size[0]; ++x)
+    {
+      invalid[(y + 1) * paddedSize[0] + x + 1] = in[y * size[0] + x] != 0 ? 0 : 1;
+    }
+  }
+  // Distance of every valid pixel centre to the nearest invalid pixel centre.
+  using DistanceType = Image<float, 2>;
+  auto distance = SignedMaurerDistanceMapImageFilter<MaskType, DistanceType>::New();
+  distance->SetInput(padded);
+  distance->SetBackgroundValue(0);
+  distance->SetUseImageSpacing(true);
+  distance->SetSquaredDistance(false);
+  distance->SetInsideIsPositive(false);
+  distance->Update();
+  const float * d = distance->GetOutput()->GetBufferPointer();
+  const double  halfPixel = 0.5 * std::min(mask->GetSpacing()[0], mask->GetSpacing()[1]);
+
+  auto eroded = MaskType::New();
+  eroded->CopyInformation(mask);
+  eroded->SetRegions(region);
+  eroded->Allocate();
+  unsigned char * out = eroded->GetBufferPointer();
+  for (SizeValueType y = 0; y < size[1]; ++y)
+  {
+    for (SizeValueType x = 0; x < size[0]; ++x)
+    {
+      const SizeValueType k = y * size[0] + x;
+      out[k] = in[k] != 0 && d[(y + 1) * paddedSize[0] + x + 1] - halfPixel >= border ? 1 : 0;
+    }
+  }
+  return eroded;
 }
 
 // Mirrored about x = 0 in physical space.
@@ -311,7 +364,19 @@ TextureFidelityCalculator::TextureFidelityCalculator()
 void
 TextureFidelityCalculator::Compute()
 {
-  const PreparedImage        reference = Prepare(m_Reference, m_ReferenceMask, "reference");
+  PreparedImage reference = Prepare(m_Reference, m_ReferenceMask, "reference");
+  if (m_BorderWidth > 0.0)
+  {
+    // The starts are placed by the whole valid region (centroid and area stay); the
+    // metric and the NCC see only its interior.
+    reference.Mask = ErodeMask(reference.Mask, m_BorderWidth);
+    const unsigned char * kept = reference.Mask->GetBufferPointer();
+    if (std::find(kept, kept + reference.Mask->GetBufferedRegion().GetNumberOfPixels(), 1) ==
+        kept + reference.Mask->GetBufferedRegion().GetNumberOfPixels())
+    {
+      itkExceptionMacro(<< "a border width of " << m_BorderWidth << " leaves no reference pixel to compare");
+    }
+  }
   std::vector<PreparedImage> textures{ Prepare(m_Texture, m_TextureMask, "texture") };
   const auto                 referenceSize = reference.Image->GetLargestPossibleRegion().GetSize();
   // The coarse level has at most CoarseSize pixels along the reference's longer side.
@@ -400,6 +465,24 @@ TextureFidelityCalculator::Compute()
       candidate.Transform = refined;
       candidate.Result = std::move(score);
     }
+    // The shrunk, smoothed levels can lead away from the optimum of the full-resolution
+    // images (fine strokes blur into blobs there): polish the kept transform at the two
+    // finest levels as well.
+    if (refinement.size() > 2)
+    {
+      TransformType::Pointer polished = AlignTexture(reference,
+                                                     textures[candidate.Texture],
+                                                     candidate.Transform,
+                                                     { 2, 1 },
+                                                     Stage::GradientDescent,
+                                                     m_NumberOfIterations);
+      Score                  polishedScore = Evaluate(reference, textures[candidate.Texture], polished);
+      if (polishedScore.NCC > candidate.Result.NCC)
+      {
+        candidate.Transform = polished;
+        candidate.Result = std::move(polishedScore);
+      }
+    }
   }
   const Candidate & best =
     *std::max_element(candidates.begin(), candidates.end(), [](const Candidate & a, const Candidate & b) {
@@ -432,6 +515,7 @@ TextureFidelityCalculator::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "AllowQuarterTurns: " << m_AllowQuarterTurns << std::endl;
   os << indent << "CoarseSize: " << m_CoarseSize << std::endl;
   os << indent << "NumberOfIterations: " << m_NumberOfIterations << std::endl;
+  os << indent << "BorderWidth: " << m_BorderWidth << std::endl;
   os << indent << "NormalizedCrossCorrelation: " << m_NormalizedCrossCorrelation << std::endl;
   os << indent << "Mirrored: " << m_Mirrored << std::endl;
   os << indent << "RotationDegrees: " << m_RotationDegrees << std::endl;

@@ -22,6 +22,7 @@
 #include "itkImageFileWriter.h"
 #include "itkSheetMeshAdaptor.h"
 #include "itkSheetPhantomSource.h"
+#include "itkSmoothingRecursiveGaussianImageFilter.h"
 #include "itkTextureFidelityCalculator.h"
 #include "vuTestHelpers.h"
 #include "vuTexturePhantom.h"
@@ -394,9 +395,24 @@ TEST(FlattenedTextureImageFilter, AbortStopsTheFilter)
 }
 
 // The standard rolled phantom with the true flattening supplied (the phantom's exact
-// mid-surface and its unrolling): the texture against the sharp ground-truth ink image.
-// Issue 6 asks for NCC >= 0.95; this scan's 0.1 mm voxels and 0.12 mm blur bound it near
-// 0.89 (see docs/texturing.md), which this test holds as a floor.
+// mid-surface and its unrolling), issue 6: the per-pixel texture against the ground-truth
+// ink image. Two things held it at 0.89 with the whole sheet compared:
+// - the sheet's outline: at its ends and long edges the mid-surface meets air, so the
+//   texture has a dark rim (about -400 HU against +250 HU of bare sheet) the ink image
+//   does not, which costs 0.03-0.05 of NCC and pulls the registration to a scale of
+//   0.997-0.998. It is not ink, so the comparison leaves out a border of the scanner's
+//   blur reach (BlurFWHM + one voxel) inside the sheet's edge (TextureFidelityCalculator's
+//   BorderWidth);
+// - resolution: the scan is the ink smoothed by the partial-volume splat into 0.1 mm
+//   voxels and a 0.12 mm FWHM Gaussian; the ink image blurred by that Gaussian alone
+//   already correlates with the sharp ink image at only about 0.97, the splat takes it to
+//   about 0.96 and any interpolation from the voxel grid lower still, so no texture of
+//   this scan reaches 0.95 against the sharp ink without deconvolution. The acceptance
+//   figure is therefore taken against the ink image blurred by the scanner's PSF
+//   (Gaussian of BlurFWHM; the voxel splat is left out, so the reference is sharper than
+//   the scan); the figure against the sharp ink is reported and held too.
+// The layers are centred on the ink: it fills the InkDepth (0.08 mm) below the face the
+// normals point out of, i.e. offsets 0.045 .. 0.125 mm from the mid-surface.
 TEST(FlattenedTextureImageFilter, StandardRolledPhantomWithTrueFlattening)
 {
   auto source = itk::SheetPhantomSource::New();
@@ -411,21 +427,59 @@ TEST(FlattenedTextureImageFilter, StandardRolledPhantomWithTrueFlattening)
   filter->SetFlatMesh(itk::SheetMeshToMesh<MeshType>(flat));
   filter->SetVolume(source->GetOutput());
   filter->SetPixelSize(0.05);
-  // The ink lies within 0.08 mm of the face the normals point out of: sample that side.
-  filter->SetLayerSide(Side::Positive);
+  const double inkDepth = source->GetInkDepth();
+  filter->SetLayerSide(Side::Both);
+  filter->SetFocus(0.5 * geometry.GetSheetThickness() - 0.5 * inkDepth);
   filter->SetNumberOfLayers(3);
-  filter->SetLayerSpacing(0.04);
+  filter->SetLayerSpacing(0.5 * inkDepth);
   filter->SetLayerFilter(Filter::Mean);
   filter->Update();
   std::cout << "[ figures ] sheet pixels " << filter->GetNumberOfSheetPixels() << " of "
             << filter->GetOutput()->GetLargestPossibleRegion().GetNumberOfPixels() << ", degenerate "
             << filter->GetNumberOfDegenerateTriangles() << ", clamped " << filter->GetNumberOfClampedSamples()
             << std::endl;
-  auto fidelity = itk::TextureFidelityCalculator::New();
-  fidelity->SetReference(geometry.GetInkImage());
-  fidelity->SetTexture(filter->GetOutput());
-  fidelity->Compute();
-  std::cout << "[ figures ] standard phantom, true flattening: texture NCC "
-            << fidelity->GetNormalizedCrossCorrelation() << std::endl;
-  EXPECT_GE(fidelity->GetNormalizedCrossCorrelation(), 0.85);
+
+  const double                                      voxel = std::min(source->GetVoxelSize(), source->GetSliceSpacing());
+  const double                                      border = source->GetBlurFWHM() + voxel;
+  const itk::TextureFidelityCalculator::ImageType * sharp = geometry.GetInkImage();
+  using InkType = itk::TextureFidelityCalculator::ImageType;
+  auto psf = itk::SmoothingRecursiveGaussianImageFilter<InkType, InkType>::New();
+  psf->SetInput(sharp);
+  psf->SetSigma(source->GetBlurFWHM() / (2.0 * std::sqrt(2.0 * std::log(2.0))));
+  psf->Update();
+  const InkType * blurred = psf->GetOutput();
+  auto            measure = [](const InkType * reference, const InkType * texture, double borderWidth) {
+    auto fidelity = itk::TextureFidelityCalculator::New();
+    fidelity->SetReference(reference);
+    fidelity->SetTexture(texture);
+    fidelity->SetBorderWidth(borderWidth);
+    fidelity->Compute();
+    std::cout << "NCC " << fidelity->GetNormalizedCrossCorrelation() << " (scale " << fidelity->GetScale()
+              << ", rotation " << fidelity->GetRotationDegrees() << " deg, mirrored " << fidelity->GetMirrored()
+              << ", overlap " << fidelity->GetOverlapFraction() << ")" << std::endl;
+    return fidelity;
+  };
+  std::cout << "[ figures ] standard phantom, true flattening, against the sharp ink, whole sheet: ";
+  const auto whole = measure(sharp, filter->GetOutput(), 0.0);
+  std::cout << "[ figures ] against the sharp ink, border " << border << " mm: ";
+  const auto interior = measure(sharp, filter->GetOutput(), border);
+  std::cout << "[ figures ] against the ink blurred by the scanner PSF (FWHM " << source->GetBlurFWHM()
+            << " mm), border " << border << " mm: ";
+  const auto fair = measure(blurred, filter->GetOutput(), border);
+  std::cout << "[ figures ] ceiling: the PSF-blurred ink against the sharp ink, border " << border << " mm: ";
+  const auto ceiling = measure(sharp, blurred, border);
+  WriteTexture(filter, "FlattenedTexture_Standard");
+  itk::WriteImage(sharp, std::string(VU_BINARY_DIR) + "/FlattenedTexture_Standard_Ink.mha");
+  itk::WriteImage(fair->GetAlignedTexture(), std::string(VU_BINARY_DIR) + "/FlattenedTexture_Standard_Aligned.mha");
+
+  // Issue 6's line, against the fair reference; the sharp figure is held below the
+  // ceiling the scanner's blur leaves.
+  EXPECT_GE(fair->GetNormalizedCrossCorrelation(), 0.95);
+  EXPECT_GE(interior->GetNormalizedCrossCorrelation(), 0.93);
+  EXPECT_LT(interior->GetNormalizedCrossCorrelation(), ceiling->GetNormalizedCrossCorrelation());
+  EXPECT_GE(whole->GetNormalizedCrossCorrelation(), 0.90);
+  // The true flattening needs no transform.
+  EXPECT_FALSE(fair->GetMirrored());
+  EXPECT_NEAR(fair->GetScale(), 1.0, 1e-3);
+  EXPECT_NEAR(fair->GetRotationDegrees(), 0.0, 0.05);
 }

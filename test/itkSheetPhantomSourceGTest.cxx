@@ -195,6 +195,56 @@ TEST(SheetPhantomSource, InkIsDenserThanTheBareSheet)
   EXPECT_GT(sum[1] / count[1] - sum[0] / count[0], 300.0);
 }
 
+// The fibres of papyrus-microct have the same contrast at the sheet's ends as in its
+// middle (the smoothing of their noise once reached past the noise image's edges and
+// made bands of several times the contrast within a fibre length of the ends).
+TEST(SheetPhantomSource, FibreContrastIsUniformAlongTheSheet)
+{
+  auto source = Source::New();
+  source->ApplyPreset("papyrus-microct");
+  source->SetInkContrast(0.0);
+  source->SetNoiseStandardDeviation(0.0);
+  const auto   volume = Generate(source);
+  const auto & g = source->GetGeometry();
+  auto         interpolator = itk::LinearInterpolateImageFunction<VolumeType>::New();
+  interpolator->SetInputImage(volume);
+  // Standard deviation of the sheet half-way into its inked half, over s in [s0, s1]
+  // and w away from the long edges.
+  auto spread = [&](double s0, double s1) {
+    double sum = 0.0, sum2 = 0.0;
+    size_t n = 0;
+    for (double s = s0; s <= s1; s += 0.01)
+    {
+      for (double w = 0.5; w <= g.GetSheetWidth() - 0.5; w += 0.01)
+      {
+        double p[3], normal[3];
+        g.SurfacePoint(s, w, p);
+        g.SurfaceNormal(s, w, normal);
+        VolumeType::PointType x;
+        for (int d = 0; d < 3; ++d)
+        {
+          x[d] = p[d] + 0.25 * g.GetSheetThickness() * normal[d];
+        }
+        const double v = interpolator->Evaluate(x);
+        sum += v;
+        sum2 += v * v;
+        ++n;
+      }
+    }
+    return std::sqrt(sum2 / n - (sum / n) * (sum / n));
+  };
+  const double ends[2] = { spread(0.1, 0.4), spread(g.GetSheetLength() - 0.4, g.GetSheetLength() - 0.1) };
+  const double middle = spread(12.0, 12.3);
+  std::cout << "[ figures ] fibre spread (HU): ends " << ends[0] << ", " << ends[1] << ", middle " << middle
+            << std::endl;
+  EXPECT_GT(middle, 20.0);
+  for (double end : ends)
+  {
+    EXPECT_LT(end, 1.5 * middle);
+    EXPECT_GT(end, middle / 1.5);
+  }
+}
+
 TEST(SheetPhantomSource, GroundTruthInkReadsAsTheText)
 {
   auto legibility = itk::TextLegibility::New();

@@ -21,6 +21,8 @@
 
 #include "gtest/gtest.h"
 
+#include <limits>
+
 namespace {
 using Legibility = itk::TextLegibility;
 
@@ -108,6 +110,43 @@ TEST(TextLegibility, ReadsRenderedText)
   legibility->InkIsBrightOff();
   legibility->Compute();
   EXPECT_EQ(Legibility::NormalizeText(legibility->GetRecognizedText()), text);
+}
+
+// An unwrapped texture is NaN off the sheet: those pixels are background, not ink, and
+// do not shift the window; an image without a finite pixel cannot be read.
+TEST(TextLegibility, NaNPixelsAreBackground)
+{
+  auto legibility = Legibility::New();
+  if (!legibility->IsTesseractAvailable())
+  {
+    GTEST_SKIP() << "tesseract is not installed";
+  }
+  auto              source = itk::SheetPhantomSource::New();
+  const std::string text = "THE QUICK BROWN FOX";
+  const auto *      ink = RenderInk(source, text);
+  using InkType = itk::SheetPhantomGeometry::InkImageType;
+  const auto        inner = ink->GetLargestPossibleRegion().GetSize();
+  const long        frame = 40;
+  auto              framed = InkType::New();
+  InkType::SizeType size = { { inner[0] + 2 * frame, inner[1] + 2 * frame } };
+  framed->SetRegions(size);
+  framed->Allocate();
+  framed->FillBuffer(std::numeric_limits<float>::quiet_NaN());
+  for (long y = 0; y < static_cast<long>(inner[1]); ++y)
+  {
+    for (long x = 0; x < static_cast<long>(inner[0]); ++x)
+    {
+      framed->SetPixel({ { x + frame, y + frame } }, ink->GetPixel({ { x, y } }));
+    }
+  }
+  legibility->SetImage(framed);
+  legibility->SetTruthText(text);
+  legibility->Compute();
+  EXPECT_EQ(Legibility::NormalizeText(legibility->GetRecognizedText()), text);
+  EXPECT_EQ(legibility->GetCharacterErrorRate(), 0.0);
+
+  framed->FillBuffer(std::numeric_limits<float>::quiet_NaN());
+  EXPECT_THROW(legibility->Compute(), itk::ExceptionObject);
 }
 
 TEST(TextLegibility, ReportsMissingTesseractAndMissingImage)

@@ -106,6 +106,56 @@ TEST(TextureFidelityCalculator, BasicObjectMethods)
   EXPECT_EQ(calculator->GetCoarseSize(), 16u);
   calculator->SetNumberOfIterations(50);
   EXPECT_EQ(calculator->GetNumberOfIterations(), 50u);
+  calculator->SetBorderWidth(0.5);
+  EXPECT_EQ(calculator->GetBorderWidth(), 0.5);
+  calculator->SetBorderWidth(-1.0);
+  EXPECT_EQ(calculator->GetBorderWidth(), 0.0);
+}
+
+// A texture that is the ink image with a dark rim (a sheet's outline against air): the
+// rim costs NCC over the whole region; a border at least as wide as the rim keeps it out,
+// and the overlap fraction counts the compared interior only.
+TEST(TextureFidelityCalculator, BorderWidthLeavesTheOutlineOut)
+{
+  const double pixel = 0.25;
+  const auto   ink = vu::MakeInkImage(pixel);
+  auto         rimmed = ImageType::New();
+  rimmed->CopyInformation(ink);
+  rimmed->SetRegions(ink->GetLargestPossibleRegion());
+  rimmed->Allocate();
+  const auto size = ink->GetLargestPossibleRegion().GetSize();
+  const int  rim = 3; // pixels
+  for (itk::ImageRegionIteratorWithIndex<ImageType> it(rimmed, rimmed->GetBufferedRegion()); !it.IsAtEnd(); ++it)
+  {
+    const auto i = it.GetIndex();
+    const bool edge =
+      i[0] < rim || i[1] < rim || i[0] >= static_cast<long>(size[0]) - rim || i[1] >= static_cast<long>(size[1]) - rim;
+    it.Set(edge ? -1.0f : ink->GetPixel(i));
+  }
+  const auto whole = Measure(ink, rimmed);
+  EXPECT_LT(whole->GetNormalizedCrossCorrelation(), 0.9);
+
+  auto interior = CalculatorType::New();
+  interior->SetReference(ink);
+  interior->SetTexture(rimmed);
+  interior->SetBorderWidth(rim * pixel);
+  interior->Compute();
+  EXPECT_NEAR(interior->GetNormalizedCrossCorrelation(), 1.0, 1e-3);
+  EXPECT_NEAR(interior->GetScale(), 1.0, 0.01);
+  EXPECT_NEAR(interior->GetOverlapFraction(), 1.0, 0.01);
+  ASSERT_TRUE(interior->GetAlignedTexture() != nullptr);
+  // The rim is outside the compared region: NaN in the aligned texture.
+  EXPECT_TRUE(std::isnan(interior->GetAlignedTexture()->GetPixel({ { 1, 1 } })));
+  EXPECT_FALSE(std::isnan(interior->GetAlignedTexture()->GetPixel({ { rim, rim } })));
+
+  // One pixel too narrow: the rim's inner ring is compared again.
+  interior->SetBorderWidth((rim - 1) * pixel);
+  interior->Compute();
+  EXPECT_LT(interior->GetNormalizedCrossCorrelation(), 0.99);
+
+  // A border wider than half the sheet leaves nothing to compare.
+  interior->SetBorderWidth(0.5 * vu::SheetHeight + 1.0);
+  EXPECT_THROW(interior->Compute(), itk::ExceptionObject);
 }
 
 TEST(TextureFidelityCalculator, IdenticalImagesCorrelatePerfectly)

@@ -29,6 +29,7 @@
 #include "itkFlipImageFilter.h"
 #include "itkImageFileReader.h"
 #include "itkImageFileWriter.h"
+#include "itkLayerStackTexture.h"
 #include "itkLayeredTextureMeshFilter.h"
 #include "itkMassSpringSheetFlattener.h"
 #include "itkRescaleIntensityImageFilter.h"
@@ -69,8 +70,12 @@ struct UnwrapOptions
   std::string       Method{ "auto" };
   unsigned int      Layers{ 0 };
   double            LayerSpacing{ 0.0 };
-  std::string       Side{ "both" };
+  std::string       Side{ "auto" };
   std::string       Filter{ "max" };
+  std::string       SubtractCore{ "auto" };
+  std::string       Median{ "auto" };
+  std::string       Smooth{ "auto" };
+  std::string       DisplayBorder{ "auto" };
   double            Focus{ 0.0 };
   double            PixelSize{ 0.0 };
   SimulationOptions Simulation;
@@ -109,6 +114,38 @@ SideFromName(const std::string & name)
 {
   using S = itk::TextureLayersEnums::Side;
   return name == "positive" ? S::Positive : (name == "negative" ? S::Negative : S::Both);
+}
+
+std::string
+SideName(itk::TextureLayersEnums::Side side)
+{
+  using S = itk::TextureLayersEnums::Side;
+  return side == S::Positive ? "positive" : (side == S::Negative ? "negative" : "both");
+}
+
+// "auto" (giving `automatic`) or a non-negative length in mm.
+double
+AutoOrLength(const std::string & value, const std::string & option, double automatic)
+{
+  if (value == "auto")
+  {
+    return automatic;
+  }
+  size_t used = 0;
+  double length = 0.0;
+  try
+  {
+    length = std::stod(value, &used);
+  }
+  catch (const std::exception &)
+  {
+    used = 0;
+  }
+  if (used != value.size() || !std::isfinite(length) || length < 0.0)
+  {
+    throw UsageError(option + " must be auto or a length >= 0 in mm, not '" + value + "'");
+  }
+  return length;
 }
 
 // Flat y grows upwards when the sheet is seen from the side its normals face; image rows
@@ -316,6 +353,18 @@ RunUnwrap(UnwrapOptions & options)
       throw UsageError("--threshold must be a number or auto, not '" + options.Threshold + "'");
     }
   }
+  // Texture options are checked before the long stages; their automatic values need the
+  // scan and the mesh.
+  for (const auto & [value, option] : { std::make_pair(options.Median, "--median"),
+                                        std::make_pair(options.Smooth, "--smooth"),
+                                        std::make_pair(options.DisplayBorder, "--display-border") })
+  {
+    AutoOrLength(value, option, 0.0);
+  }
+  if (options.Side == "auto" && options.Layers > 0 && options.Layers % 2 == 0)
+  {
+    throw UsageError("--side auto splits the layers at the focus: give an odd number of --layers");
+  }
   itk::TextureFidelityCalculator::ImageType::Pointer truthInk;
   std::string                                        truthText;
   if (!options.GroundTruth.empty())
@@ -407,15 +456,29 @@ RunUnwrap(UnwrapOptions & options)
   const double voxel = std::min({ spacing[0], spacing[1], spacing[2] });
   const double pixelSize = options.PixelSize > 0.0 ? options.PixelSize : voxel / 2.0;
   const double layerSpacing = options.LayerSpacing > 0.0 ? options.LayerSpacing : voxel / 2.0;
-  // Automatic layers span the sheet's measured thickness and half a voxel beyond each face,
-  // so ink on either face or inside is seen, and no more.
+  const bool   automaticSide = options.Side == "auto";
+  using SideEnum = itk::TextureLayersEnums::Side;
+  // With --side auto the layers are sampled on both sides and each half is a candidate.
+  const SideEnum stackSide = automaticSide ? SideEnum::Both : SideFromName(options.Side);
+  // Automatic layers reach from the surface to half a voxel beyond the sheet's measured
+  // face, on both sides or on the one side asked for, so ink on either face or inside is
+  // seen, and no more.
+  const auto reach =
+    static_cast<unsigned int>(std::ceil((0.5 * meshReport.SheetThickness + 0.5 * voxel) / layerSpacing));
   const unsigned int layerCount =
-    options.Layers > 0
-      ? options.Layers
-      : 1 + 2 * static_cast<unsigned int>(std::ceil((0.5 * meshReport.SheetThickness + 0.5 * voxel) / layerSpacing));
-  auto surfaceMesh = itk::SheetMeshToMesh<MeshType>(surface);
-  auto flatMesh = itk::SheetMeshToMesh<MeshType>(flat);
-  auto texturer = itk::FlattenedTextureImageFilter<VolumeType, TextureType, MeshType>::New();
+    options.Layers > 0 ? options.Layers : (stackSide == SideEnum::Both ? 1 + 2 * reach : 1 + reach);
+  if (automaticSide && layerCount % 2 == 0)
+  {
+    throw UsageError("--side auto splits the layers at the focus: give an odd number of --layers");
+  }
+  const double medianRadius = AutoOrLength(options.Median, "--median", 0.5 * voxel);
+  const double smoothSigma = AutoOrLength(options.Smooth, "--smooth", 0.5 * voxel);
+  const double displayBorder = AutoOrLength(options.DisplayBorder, "--display-border", meshReport.SheetThickness);
+  // The sheet's core: the layers within half a voxel of the surface on the chosen side.
+  const double coreWidth = 0.5 * voxel;
+  auto         surfaceMesh = itk::SheetMeshToMesh<MeshType>(surface);
+  auto         flatMesh = itk::SheetMeshToMesh<MeshType>(flat);
+  auto         texturer = itk::FlattenedTextureImageFilter<VolumeType, TextureType, MeshType>::New();
   texturer->SetSurfaceMesh(surfaceMesh);
   texturer->SetFlatMesh(flatMesh);
   texturer->SetVolume(volume);
@@ -424,17 +487,77 @@ RunUnwrap(UnwrapOptions & options)
   texturer->SetNumberOfLayers(layerCount);
   texturer->SetLayerSpacing(layerSpacing);
   texturer->SetFocus(options.Focus);
-  texturer->SetLayerSide(SideFromName(options.Side));
+  texturer->SetLayerSide(stackSide);
   texturer->SetLayerFilter(FilterFromName(options.Filter));
   progress.Observe(texturer);
   texturer->Update();
-  auto perVertex = itk::LayeredTextureMeshFilter<MeshType, VolumeType, MeshType>::New();
+
+  // Candidate textures from the layer stack: the sides (both halves too with --side auto)
+  // with and without the sheet's core subtracted (one side only with --subtract-core
+  // auto), each denoised (median, then Gaussian); the one of highest ink contrast is kept.
+  struct Candidate
+  {
+    SideEnum             Side;
+    bool                 SubtractCore;
+    double               InkContrast;
+    TextureType::Pointer Texture;
+  };
+  std::vector<Candidate>      candidates;
+  const std::vector<SideEnum> sides =
+    automaticSide ? std::vector<SideEnum>{ SideEnum::Both, SideEnum::Positive, SideEnum::Negative }
+                  : std::vector<SideEnum>{ stackSide };
+  for (const SideEnum side : sides)
+  {
+    std::vector<bool> cores;
+    if (options.SubtractCore == "yes")
+    {
+      cores = { true };
+    }
+    else if (options.SubtractCore == "no" || side == SideEnum::Both)
+    {
+      cores = { false };
+    }
+    else
+    {
+      cores = { false, true };
+    }
+    for (const bool core : cores)
+    {
+      auto combined = itk::LayerStackTexture::Combine(texturer->GetLayerStackOutput(),
+                                                      layerCount,
+                                                      layerSpacing,
+                                                      options.Focus,
+                                                      stackSide,
+                                                      side,
+                                                      FilterFromName(options.Filter),
+                                                      texturer->GetGaussianSigma(),
+                                                      core ? coreWidth : 0.0);
+      auto smoothed =
+        itk::LayerStackTexture::Smooth(itk::LayerStackTexture::Median(combined, medianRadius), smoothSigma);
+      candidates.push_back({ side, core, itk::LayerStackTexture::InkContrast(smoothed), smoothed });
+    }
+  }
+  const Candidate & chosen =
+    *std::max_element(candidates.begin(), candidates.end(), [](const Candidate & a, const Candidate & b) {
+      return a.InkContrast < b.InkContrast;
+    });
+  nlohmann::json candidateReport = nlohmann::json::array();
+  for (const Candidate & c : candidates)
+  {
+    candidateReport.push_back(
+      { { "side", SideName(c.Side) }, { "subtract_core", c.SubtractCore }, { "ink_contrast", c.InkContrast } });
+  }
+
+  // The per-vertex texture (surface.vtp) samples the chosen side with the same filter,
+  // without core subtraction or denoising.
+  const unsigned int vertexLayers = chosen.Side == stackSide ? layerCount : (layerCount + 1) / 2;
+  auto               perVertex = itk::LayeredTextureMeshFilter<MeshType, VolumeType, MeshType>::New();
   perVertex->SetInput(surfaceMesh);
   perVertex->SetVolume(volume);
-  perVertex->SetNumberOfLayers(layerCount);
+  perVertex->SetNumberOfLayers(vertexLayers);
   perVertex->SetLayerSpacing(layerSpacing);
   perVertex->SetFocus(options.Focus);
-  perVertex->SetLayerSide(SideFromName(options.Side));
+  perVertex->SetLayerSide(chosen.Side);
   perVertex->SetLayerFilter(FilterFromName(options.Filter));
   perVertex->Update();
   std::vector<float> vertexTexture(surface.GetNumberOfPoints(), 0.0f);
@@ -446,10 +569,13 @@ RunUnwrap(UnwrapOptions & options)
       vertexTexture[it.Index()] = it.Value();
     }
   }
-  TextureType::Pointer     texture = FlipRows(texturer->GetOutput());
+  TextureType::Pointer     texture = FlipRows(chosen.Texture.GetPointer());
   TextureMaskType::Pointer textureMask = FlipRows(texturer->GetMaskOutput());
   LayerStackType::Pointer  layers = FlipRows(texturer->GetLayerStackOutput());
-  auto                     texture8 = EightBit(texture);
+  // The image to look at and to read: the texture less a border of the sheet, where the
+  // mid-surface meets the sheet's ends and edges and the samples mix in air.
+  TextureType::Pointer display = itk::LayerStackTexture::TrimBorder(texture, displayBorder);
+  auto                 texture8 = EightBit(display);
   endStage("texture");
 
   // 6. Write everything under a temporary directory, then move it into place.
@@ -501,11 +627,24 @@ RunUnwrap(UnwrapOptions & options)
                                { "spacing_along_axis_mm", meshReport.SpacingAlongAxis } } },
                            { "texture",
                              { { "layers", layerCount },
+                               { "layers_combined", vertexLayers },
                                { "layer_spacing_mm", layerSpacing },
-                               { "side", options.Side },
+                               { "side", SideName(chosen.Side) },
+                               { "side_requested", options.Side },
                                { "filter", options.Filter },
+                               { "subtract_core", chosen.SubtractCore },
+                               { "subtract_core_requested", options.SubtractCore },
+                               { "core_width_mm", coreWidth },
+                               { "median_radius_mm", medianRadius },
+                               { "smooth_sigma_mm", smoothSigma },
+                               { "display_border_mm", displayBorder },
                                { "focus_mm", options.Focus },
-                               { "pixel_size_mm", pixelSize } } },
+                               { "pixel_size_mm", pixelSize },
+                               { "selection",
+                                 { { "criterion",
+                                     "highest ink contrast, (99th percentile - median) / (1.4826 median absolute "
+                                     "deviation) of the denoised texture" },
+                                   { "candidates", candidateReport } } } } },
                            { "simulation", ToJson(flattener.GetParameters()) } };
   report["mesh"] = { { "points", surface.GetNumberOfPoints() },
                      { "triangles", surface.GetNumberOfTriangles() },
@@ -531,8 +670,9 @@ RunUnwrap(UnwrapOptions & options)
     fidelity->SetReference(truthInk);
     fidelity->SetTexture(texture);
     fidelity->Compute();
+    // OCR reads the image a person looks at (texture.png's).
     auto legibility = itk::TextLegibility::New();
-    legibility->SetImage(texture);
+    legibility->SetImage(display);
     legibility->SetTruthText(truthText);
     legibility->Compute();
     itk::Object::SetGlobalWarningDisplay(warningsWereOn);
@@ -596,13 +736,46 @@ RegisterUnwrapCommand(CLI::App & app)
     ->capture_default_str()
     ->check(CLI::NonNegativeNumber)
     ->group(tex);
-  command->add_option("--side", options.Side, "layers on both sides of the surface, or positive / negative side only")
+  command
+    ->add_option("--side",
+                 options.Side,
+                 "layers on both sides of the surface, positive / negative side only, or auto: sampled on both sides, "
+                 "then the whole stack or either half, whichever shows the highest ink contrast")
     ->capture_default_str()
-    ->check(CLI::IsMember({ "both", "positive", "negative" }))
+    ->check(CLI::IsMember({ "auto", "both", "positive", "negative" }))
     ->group(tex);
   command->add_option("--filter", options.Filter, "how layers combine: mean, gaussian, max, min, median, single")
     ->capture_default_str()
     ->check(CLI::IsMember({ "mean", "gaussian", "max", "min", "median", "single" }))
+    ->group(tex);
+  command
+    ->add_option("--subtract-core",
+                 options.SubtractCore,
+                 "subtract the mean of the layers within half a voxel of the surface (the sheet's core: structure "
+                 "running through the sheet's depth, like fibres, cancels; ink near a face stays): yes, no, or auto: "
+                 "for one-sided textures, whichever shows the higher ink contrast")
+    ->capture_default_str()
+    ->check(CLI::IsMember({ "auto", "yes", "no" }))
+    ->group(tex);
+  command
+    ->add_option("--median",
+                 options.Median,
+                 "half-side of the square median filter denoising the texture, mm (0: none), or auto: half the voxel "
+                 "size (specks smaller than the scan resolves go, edges stay)")
+    ->capture_default_str()
+    ->group(tex);
+  command
+    ->add_option("--smooth",
+                 options.Smooth,
+                 "Gaussian sigma smoothing the texture after the median, mm (0: none), or auto: half the voxel size")
+    ->capture_default_str()
+    ->group(tex);
+  command
+    ->add_option("--display-border",
+                 options.DisplayBorder,
+                 "border of the sheet left out of texture.png and of the OCR, mm, or auto: the measured sheet "
+                 "thickness (the mid-surface meets the sheet's ends and edges there)")
+    ->capture_default_str()
     ->group(tex);
   command->add_option("--focus", options.Focus, "offset of the central layer along the normal, mm")
     ->capture_default_str()

@@ -1,0 +1,94 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkLayerStackTexture_h
+#define itkLayerStackTexture_h
+
+#include "VirtualUnwrappingExport.h"
+#include "itkImage.h"
+#include "itkTextureLayers.h"
+
+namespace itk {
+/** \class LayerStackTexture
+ * \brief Textures made after sampling, from a layer stack (FlattenedTextureImageFilter's
+ * output 2): one side of the sheet, the sheet's core subtracted, an ink-contrast score to
+ * choose between such textures, NaN-aware smoothing and trimming of the sheet's border.
+ *
+ * All images are float; NaN marks pixels off the sheet and stays NaN. Every function
+ * throws itk::ExceptionObject with a one-line message on a missing image or a parameter
+ * out of range.
+ *
+ * - Combine(): the layers of a stack sampled with (numberOfLayers, layerSpacing, focus,
+ *   stackSide) that lie on `side` of the focus, combined with `filter` exactly as
+ *   TextureLayers combines them. A stack sampled on Both sides (an odd number of layers)
+ *   splits into its Positive half (the focus layer and the layers along the normal) and
+ *   its Negative half; otherwise `side` must be the stack's side. With coreWidth > 0 the
+ *   mean of the chosen layers within coreWidth of the focus (the sheet's core when the
+ *   focus is the mid-surface) is subtracted: ink is dense matter added near a face, while
+ *   the sheet's own structure (fibres, density changes) runs through its depth, so the
+ *   difference keeps the ink and cancels most of the structure.
+ * - InkContrast(): (99th percentile - median) / (1.4826 median absolute deviation) of the
+ *   finite pixels: how far the brightest percent stands above the spread of the bulk.
+ *   Ink is denser than the sheet and covers a small part of it, so the texture that shows
+ *   it best scores highest; structure and noise raise the spread and lower the score.
+ *   Returns 0 when fewer than 2 pixels are finite or the spread is 0.
+ * - Smooth(): Gaussian of standard deviation sigma (physical units, 0 returns a copy) by
+ *   normalised convolution: NaN pixels neither contribute nor change.
+ * - Median(): median of the finite pixels in the square of half-side `radius` (physical
+ *   units, rounded to whole pixels per axis; less than half a pixel returns a copy) around
+ *   each finite pixel; NaN pixels stay NaN. Removes specks smaller than about the radius
+ *   and keeps edges.
+ * - TrimBorder(): pixels whose centre lies less than `width` (physical units) inside the
+ *   edge of the finite region (taken half a pixel beyond the centres of its outermost
+ *   pixels; the image border counts as an edge) become NaN; 0 returns a copy.
+ *
+ * \ingroup VirtualUnwrapping
+ */
+class VirtualUnwrapping_EXPORT LayerStackTexture
+{
+public:
+  using TextureType = Image<float, 2>;
+  using LayerStackType = Image<float, 3>;
+  using SideType = TextureLayersEnums::Side;
+  using FilterType = TextureLayersEnums::Filter;
+
+  static TextureType::Pointer
+  Combine(const LayerStackType * stack,
+          unsigned int           numberOfLayers,
+          double                 layerSpacing,
+          double                 focus,
+          SideType               stackSide,
+          SideType               side,
+          FilterType             filter,
+          double                 gaussianSigma,
+          double                 coreWidth);
+
+  static double
+  InkContrast(const TextureType * texture);
+
+  static TextureType::Pointer
+  Smooth(const TextureType * texture, double sigma);
+
+  static TextureType::Pointer
+  Median(const TextureType * texture, double radius);
+
+  static TextureType::Pointer
+  TrimBorder(const TextureType * texture, double width);
+};
+} // end namespace itk
+
+#endif

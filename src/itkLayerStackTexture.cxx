@@ -1,0 +1,379 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkLayerStackTexture.h"
+
+#include "itkSignedMaurerDistanceMapImageFilter.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace itk {
+namespace {
+using TextureType = LayerStackTexture::TextureType;
+
+constexpr float NaN = std::numeric_limits<float>::quiet_NaN();
+
+// An empty texture with the geometry of `like` (2D), or of the first two axes of a stack.
+TextureType::Pointer
+NewTexture(const TextureType * like)
+{
+  auto texture = TextureType::New();
+  texture->CopyInformation(like);
+  texture->SetRegions(like->GetBufferedRegion());
+  texture->Allocate();
+  return texture;
+}
+
+void
+CheckTexture(const TextureType * texture, const char * function)
+{
+  if (texture == nullptr)
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::" << function << ": no texture");
+  }
+  if (texture->GetBufferedRegion() != texture->GetLargestPossibleRegion())
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::" << function << ": the texture is not fully buffered");
+  }
+}
+} // namespace
+
+LayerStackTexture::TextureType::Pointer
+LayerStackTexture::Combine(const LayerStackType * stack,
+                           unsigned int           numberOfLayers,
+                           double                 layerSpacing,
+                           double                 focus,
+                           SideType               stackSide,
+                           SideType               side,
+                           FilterType             filter,
+                           double                 gaussianSigma,
+                           double                 coreWidth)
+{
+  if (stack == nullptr)
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::Combine: no layer stack");
+  }
+  const auto size = stack->GetBufferedRegion().GetSize();
+  if (stack->GetBufferedRegion() != stack->GetLargestPossibleRegion() || size[2] != numberOfLayers)
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::Combine: the stack has " << size[2] << " layers, not "
+                             << numberOfLayers << ", or is not fully buffered");
+  }
+  if (!(coreWidth >= 0.0) || !std::isfinite(coreWidth))
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::Combine: the core width must be >= 0 and finite, got "
+                             << coreWidth);
+  }
+  // The chosen layers: all of them, or one half of a stack sampled on both sides.
+  std::vector<SizeValueType> index;
+  unsigned int               count = numberOfLayers;
+  if (side == stackSide)
+  {
+    for (unsigned int k = 0; k < numberOfLayers; ++k)
+    {
+      index.push_back(k);
+    }
+  }
+  else if (stackSide == SideType::Both && numberOfLayers % 2 == 1)
+  {
+    const unsigned int centre = (numberOfLayers - 1) / 2;
+    count = centre + 1;
+    for (unsigned int k = 0; k < count; ++k)
+    {
+      index.push_back(side == SideType::Positive ? centre + k : centre - k);
+    }
+  }
+  else
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::Combine: cannot take the " << side << " layers of a stack of "
+                             << numberOfLayers << " layers sampled on side " << stackSide
+                             << " (a stack sampled on both sides with an odd number of layers splits in halves)");
+  }
+  const TextureLayers        layers(count, layerSpacing, focus, side, filter, gaussianSigma);
+  std::vector<SizeValueType> core;
+  if (coreWidth > 0.0)
+  {
+    for (unsigned int k = 0; k < count; ++k)
+    {
+      if (std::abs(layers.GetOffsets()[k] - focus) <= coreWidth + 1e-9 * layerSpacing)
+      {
+        core.push_back(k);
+      }
+    }
+    if (core.empty())
+    {
+      itkGenericExceptionMacro(<< "LayerStackTexture::Combine: no layer lies within the core width " << coreWidth
+                               << " of the focus");
+    }
+  }
+
+  auto                   texture = TextureType::New();
+  TextureType::SizeType  textureSize = { { size[0], size[1] } };
+  TextureType::PointType origin;
+  origin[0] = stack->GetOrigin()[0];
+  origin[1] = stack->GetOrigin()[1];
+  TextureType::SpacingType spacing;
+  spacing[0] = stack->GetSpacing()[0];
+  spacing[1] = stack->GetSpacing()[1];
+  texture->SetRegions(textureSize);
+  texture->SetOrigin(origin);
+  texture->SetSpacing(spacing);
+  texture->Allocate();
+
+  const float *       in = stack->GetBufferPointer();
+  float *             out = texture->GetBufferPointer();
+  const SizeValueType plane = size[0] * size[1];
+  std::vector<float>  samples(count);
+  for (SizeValueType p = 0; p < plane; ++p)
+  {
+    bool finite = true;
+    for (unsigned int k = 0; k < count; ++k)
+    {
+      samples[k] = in[index[k] * plane + p];
+      finite = finite && std::isfinite(samples[k]);
+    }
+    if (!finite)
+    {
+      out[p] = NaN;
+      continue;
+    }
+    double coreMean = 0.0;
+    for (SizeValueType k : core)
+    {
+      coreMean += samples[k];
+    }
+    coreMean = core.empty() ? 0.0 : coreMean / core.size();
+    out[p] = static_cast<float>(layers.Combine(samples.data()) - coreMean);
+  }
+  return texture;
+}
+
+double
+LayerStackTexture::InkContrast(const TextureType * texture)
+{
+  CheckTexture(texture, "InkContrast");
+  const float *      buffer = texture->GetBufferPointer();
+  std::vector<float> values;
+  values.reserve(texture->GetBufferedRegion().GetNumberOfPixels());
+  for (SizeValueType k = 0; k < texture->GetBufferedRegion().GetNumberOfPixels(); ++k)
+  {
+    if (std::isfinite(buffer[k]))
+    {
+      values.push_back(buffer[k]);
+    }
+  }
+  if (values.size() < 2)
+  {
+    return 0.0;
+  }
+  const auto rank = [&values](double q) {
+    const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * (values.size() - 1) + 0.5));
+    std::nth_element(values.begin(), values.begin() + k, values.end());
+    return static_cast<double>(values[k]);
+  };
+  const double top = rank(0.99);
+  const double median = rank(0.5);
+  for (float & v : values)
+  {
+    v = std::abs(v - static_cast<float>(median));
+  }
+  const double spread = 1.4826 * rank(0.5);
+  return spread > 0.0 ? (top - median) / spread : 0.0;
+}
+
+LayerStackTexture::TextureType::Pointer
+LayerStackTexture::Smooth(const TextureType * texture, double sigma)
+{
+  CheckTexture(texture, "Smooth");
+  if (!(sigma >= 0.0) || !std::isfinite(sigma))
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::Smooth: sigma must be >= 0 and finite, got " << sigma);
+  }
+  auto          result = NewTexture(texture);
+  const auto    size = texture->GetBufferedRegion().GetSize();
+  const size_t  n = texture->GetBufferedRegion().GetNumberOfPixels();
+  const float * in = texture->GetBufferPointer();
+  float *       out = result->GetBufferPointer();
+  if (sigma == 0.0)
+  {
+    std::copy(in, in + n, out);
+    return result;
+  }
+  // Normalised convolution: the weighted sum of the finite values over the sum of their
+  // weights, separably along x then y.
+  std::vector<double> value(n), weight(n);
+  for (size_t k = 0; k < n; ++k)
+  {
+    const bool ok = std::isfinite(in[k]);
+    value[k] = ok ? in[k] : 0.0;
+    weight[k] = ok ? 1.0 : 0.0;
+  }
+  for (unsigned int d = 0; d < 2; ++d)
+  {
+    const double        s = sigma / texture->GetSpacing()[d];
+    const long          radius = std::max(1L, static_cast<long>(std::ceil(3.0 * s)));
+    std::vector<double> kernel(2 * radius + 1);
+    for (long r = -radius; r <= radius; ++r)
+    {
+      kernel[r + radius] = std::exp(-0.5 * r * r / (s * s));
+    }
+    const long          length = static_cast<long>(size[d]);
+    const size_t        stride = d == 0 ? 1 : size[0];
+    const size_t        lines = d == 0 ? size[1] : size[0];
+    std::vector<double> v(length), w(length);
+    for (size_t line = 0; line < lines; ++line)
+    {
+      const size_t first = d == 0 ? line * size[0] : line;
+      for (long i = 0; i < length; ++i)
+      {
+        v[i] = value[first + i * stride];
+        w[i] = weight[first + i * stride];
+      }
+      for (long i = 0; i < length; ++i)
+      {
+        double sv = 0.0, sw = 0.0;
+        for (long r = std::max(-radius, -i); r <= std::min(radius, length - 1 - i); ++r)
+        {
+          sv += kernel[r + radius] * v[i + r];
+          sw += kernel[r + radius] * w[i + r];
+        }
+        value[first + i * stride] = sv;
+        weight[first + i * stride] = sw;
+      }
+    }
+  }
+  for (size_t k = 0; k < n; ++k)
+  {
+    out[k] = std::isfinite(in[k]) && weight[k] > 0.0 ? static_cast<float>(value[k] / weight[k]) : NaN;
+  }
+  return result;
+}
+
+LayerStackTexture::TextureType::Pointer
+LayerStackTexture::Median(const TextureType * texture, double radius)
+{
+  CheckTexture(texture, "Median");
+  if (!(radius >= 0.0) || !std::isfinite(radius))
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::Median: the radius must be >= 0 and finite, got " << radius);
+  }
+  auto          result = NewTexture(texture);
+  const auto    size = texture->GetBufferedRegion().GetSize();
+  const float * in = texture->GetBufferPointer();
+  float *       out = result->GetBufferPointer();
+  long          half[2];
+  for (unsigned int d = 0; d < 2; ++d)
+  {
+    half[d] = std::lround(radius / texture->GetSpacing()[d]);
+  }
+  std::vector<float> window;
+  window.reserve((2 * half[0] + 1) * (2 * half[1] + 1));
+  for (long y = 0; y < static_cast<long>(size[1]); ++y)
+  {
+    for (long x = 0; x < static_cast<long>(size[0]); ++x)
+    {
+      const float centre = in[y * size[0] + x];
+      if (!std::isfinite(centre))
+      {
+        out[y * size[0] + x] = centre;
+        continue;
+      }
+      window.clear();
+      for (long v = std::max(0L, y - half[1]); v <= std::min<long>(size[1] - 1, y + half[1]); ++v)
+      {
+        for (long u = std::max(0L, x - half[0]); u <= std::min<long>(size[0] - 1, x + half[0]); ++u)
+        {
+          const float value = in[v * size[0] + u];
+          if (std::isfinite(value))
+          {
+            window.push_back(value);
+          }
+        }
+      }
+      // An even count takes the mean of the two middle values.
+      const auto middle = window.begin() + window.size() / 2;
+      std::nth_element(window.begin(), middle, window.end());
+      float median = *middle;
+      if (window.size() % 2 == 0)
+      {
+        median = 0.5f * (median + *std::max_element(window.begin(), middle));
+      }
+      out[y * size[0] + x] = median;
+    }
+  }
+  return result;
+}
+
+LayerStackTexture::TextureType::Pointer
+LayerStackTexture::TrimBorder(const TextureType * texture, double width)
+{
+  CheckTexture(texture, "TrimBorder");
+  if (!(width >= 0.0) || !std::isfinite(width))
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::TrimBorder: the width must be >= 0 and finite, got " << width);
+  }
+  auto          result = NewTexture(texture);
+  const auto    size = texture->GetBufferedRegion().GetSize();
+  const float * in = texture->GetBufferPointer();
+  float *       out = result->GetBufferPointer();
+  std::copy(in, in + texture->GetBufferedRegion().GetNumberOfPixels(), out);
+  if (width == 0.0)
+  {
+    return result;
+  }
+  // Distance of every pixel centre to the nearest non-finite pixel centre, with a ring of
+  // non-finite pixels around the image.
+  using MaskType = Image<unsigned char, 2>;
+  auto               outside = MaskType::New();
+  MaskType::SizeType paddedSize = { { size[0] + 2, size[1] + 2 } };
+  outside->SetRegions(paddedSize);
+  outside->SetSpacing(texture->GetSpacing());
+  outside->Allocate();
+  outside->FillBuffer(1);
+  unsigned char * mask = outside->GetBufferPointer();
+  for (SizeValueType y = 0; y < size[1]; ++y)
+  {
+    for (SizeValueType x = 0; x < size[0]; ++x)
+    {
+      mask[(y + 1) * paddedSize[0] + x + 1] = std::isfinite(in[y * size[0] + x]) ? 0 : 1;
+    }
+  }
+  auto distance = SignedMaurerDistanceMapImageFilter<MaskType, Image<float, 2>>::New();
+  distance->SetInput(outside);
+  distance->SetBackgroundValue(0);
+  distance->SetUseImageSpacing(true);
+  distance->SetSquaredDistance(false);
+  distance->SetInsideIsPositive(false);
+  distance->Update();
+  const float * d = distance->GetOutput()->GetBufferPointer();
+  const double  halfPixel = 0.5 * std::min(texture->GetSpacing()[0], texture->GetSpacing()[1]);
+  for (SizeValueType y = 0; y < size[1]; ++y)
+  {
+    for (SizeValueType x = 0; x < size[0]; ++x)
+    {
+      if (d[(y + 1) * paddedSize[0] + x + 1] - halfPixel < width)
+      {
+        out[y * size[0] + x] = NaN;
+      }
+    }
+  }
+  return result;
+}
+} // end namespace itk

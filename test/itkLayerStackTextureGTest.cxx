@@ -1,0 +1,299 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkLayerStackTexture.h"
+
+#include "gtest/gtest.h"
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <random>
+
+namespace {
+using LST = itk::LayerStackTexture;
+using TextureType = LST::TextureType;
+using StackType = LST::LayerStackType;
+using Side = itk::TextureLayersEnums::Side;
+using Filter = itk::TextureLayersEnums::Filter;
+constexpr float NaN = std::numeric_limits<float>::quiet_NaN();
+
+StackType::Pointer
+MakeStack(unsigned                                                   columns,
+          unsigned                                                   rows,
+          unsigned                                                   layers,
+          const std::function<float(unsigned, unsigned, unsigned)> & f)
+{
+  auto                stack = StackType::New();
+  StackType::SizeType size = { { columns, rows, layers } };
+  stack->SetRegions(size);
+  StackType::SpacingType spacing;
+  spacing[0] = 0.5;
+  spacing[1] = 0.25;
+  spacing[2] = 1.0;
+  stack->SetSpacing(spacing);
+  stack->Allocate();
+  for (unsigned k = 0; k < layers; ++k)
+  {
+    for (unsigned y = 0; y < rows; ++y)
+    {
+      for (unsigned x = 0; x < columns; ++x)
+      {
+        stack->SetPixel({ { long(x), long(y), long(k) } }, f(x, y, k));
+      }
+    }
+  }
+  return stack;
+}
+
+TextureType::Pointer
+MakeTexture(unsigned columns, unsigned rows, double pixel, const std::function<float(unsigned, unsigned)> & f)
+{
+  auto                  texture = TextureType::New();
+  TextureType::SizeType size = { { columns, rows } };
+  texture->SetRegions(size);
+  TextureType::SpacingType spacing;
+  spacing.Fill(pixel);
+  texture->SetSpacing(spacing);
+  texture->Allocate();
+  for (unsigned y = 0; y < rows; ++y)
+  {
+    for (unsigned x = 0; x < columns; ++x)
+    {
+      texture->SetPixel({ { long(x), long(y) } }, f(x, y));
+    }
+  }
+  return texture;
+}
+
+float
+At(const TextureType * t, long x, long y)
+{
+  return t->GetPixel({ { x, y } });
+}
+
+double
+Correlation(const TextureType * a, const TextureType * b)
+{
+  double        sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+  const size_t  n = a->GetBufferedRegion().GetNumberOfPixels();
+  const float * x = a->GetBufferPointer();
+  const float * y = b->GetBufferPointer();
+  for (size_t k = 0; k < n; ++k)
+  {
+    sa += x[k];
+    sb += y[k];
+    saa += double(x[k]) * x[k];
+    sbb += double(y[k]) * y[k];
+    sab += double(x[k]) * y[k];
+  }
+  const double cov = sab - sa * sb / n, va = saa - sa * sa / n, vb = sbb - sb * sb / n;
+  return cov / std::sqrt(va * vb);
+}
+} // namespace
+
+// Five layers at offsets -2 .. 2 (focus 0), layer k holding k * 10 + x: the halves, the
+// filters and the core subtraction on known numbers.
+TEST(LayerStackTexture, CombinesHalvesFiltersAndCore)
+{
+  const auto stack = MakeStack(4, 3, 5, [](unsigned x, unsigned, unsigned k) { return float(10 * k + x); });
+  auto       combine = [&](Side stackSide, Side side, Filter filter, double core) {
+    return LST::Combine(stack, 5, 1.0, 0.0, stackSide, side, filter, 1.0, core);
+  };
+  EXPECT_FLOAT_EQ(At(combine(Side::Both, Side::Both, Filter::Max, 0.0), 1, 0), 41.0f);
+  EXPECT_FLOAT_EQ(At(combine(Side::Both, Side::Positive, Filter::Max, 0.0), 1, 0), 41.0f);
+  EXPECT_FLOAT_EQ(At(combine(Side::Both, Side::Positive, Filter::Mean, 0.0), 2, 1), 32.0f); // layers 2, 3, 4
+  EXPECT_FLOAT_EQ(At(combine(Side::Both, Side::Negative, Filter::Max, 0.0), 3, 2), 23.0f);  // layers 2, 1, 0
+  EXPECT_FLOAT_EQ(At(combine(Side::Both, Side::Negative, Filter::Min, 0.0), 0, 0), 0.0f);
+  EXPECT_FLOAT_EQ(At(combine(Side::Both, Side::Negative, Filter::SingleLayer, 0.0), 0, 0), 20.0f);
+  // Core: the layers of the half within the core width of the focus.
+  EXPECT_FLOAT_EQ(At(combine(Side::Both, Side::Positive, Filter::Max, 0.5), 1, 0), 41.0f - 21.0f);
+  EXPECT_FLOAT_EQ(At(combine(Side::Both, Side::Positive, Filter::Max, 1.0), 1, 0), 41.0f - 26.0f);
+  EXPECT_FLOAT_EQ(At(combine(Side::Both, Side::Negative, Filter::Max, 1.0), 1, 0), 21.0f - 16.0f);
+  EXPECT_FLOAT_EQ(At(combine(Side::Both, Side::Both, Filter::Max, 1.0), 1, 0), 41.0f - 21.0f);
+  // A stack sampled on one side: all its layers are that side.
+  EXPECT_FLOAT_EQ(At(combine(Side::Positive, Side::Positive, Filter::Mean, 1.0), 0, 0), 20.0f - 5.0f);
+  // Geometry of the first two axes.
+  const auto texture = combine(Side::Both, Side::Both, Filter::Mean, 0.0);
+  EXPECT_EQ(texture->GetLargestPossibleRegion().GetSize()[0], 4u);
+  EXPECT_EQ(texture->GetLargestPossibleRegion().GetSize()[1], 3u);
+  EXPECT_DOUBLE_EQ(texture->GetSpacing()[0], 0.5);
+  EXPECT_DOUBLE_EQ(texture->GetSpacing()[1], 0.25);
+
+  // Off the sheet stays off the sheet.
+  auto holed = MakeStack(4, 3, 5, [](unsigned x, unsigned y, unsigned k) { return x == 2 && y == 1 ? NaN : float(k); });
+  EXPECT_TRUE(
+    std::isnan(At(LST::Combine(holed, 5, 1.0, 0.0, Side::Both, Side::Positive, Filter::Max, 1.0, 0.5), 2, 1)));
+  EXPECT_FALSE(
+    std::isnan(At(LST::Combine(holed, 5, 1.0, 0.0, Side::Both, Side::Positive, Filter::Max, 1.0, 0.5), 1, 1)));
+}
+
+TEST(LayerStackTexture, CombineRejectsWhatItCannotSplit)
+{
+  const auto stack = MakeStack(2, 2, 4, [](unsigned, unsigned, unsigned k) { return float(k); });
+  // An even stack has no layer at the focus to split at.
+  EXPECT_THROW(LST::Combine(stack, 4, 1.0, 0.0, Side::Both, Side::Positive, Filter::Max, 1.0, 0.0),
+               itk::ExceptionObject);
+  // One side is not the other.
+  EXPECT_THROW(LST::Combine(stack, 4, 1.0, 0.0, Side::Negative, Side::Positive, Filter::Max, 1.0, 0.0),
+               itk::ExceptionObject);
+  EXPECT_THROW(LST::Combine(stack, 5, 1.0, 0.0, Side::Both, Side::Both, Filter::Max, 1.0, 0.0), itk::ExceptionObject);
+  EXPECT_THROW(LST::Combine(stack, 4, 1.0, 0.0, Side::Both, Side::Both, Filter::Max, 1.0, -1.0), itk::ExceptionObject);
+  // Layers at +/- 0.5 and 1.5: none within 0.25 of the focus.
+  EXPECT_THROW(LST::Combine(stack, 4, 1.0, 0.0, Side::Both, Side::Both, Filter::Max, 1.0, 0.25), itk::ExceptionObject);
+  EXPECT_THROW(LST::Combine(nullptr, 4, 1.0, 0.0, Side::Both, Side::Both, Filter::Max, 1.0, 0.0), itk::ExceptionObject);
+}
+
+// A sheet whose structure (fibres) runs through its depth, with ink in its outermost layer
+// on the positive side: the max of the positive half shows ink and structure, subtracting
+// the core leaves the ink; the ink contrast ranks the two the same way, and ranks the
+// ink-free negative half lowest.
+TEST(LayerStackTexture, CoreSubtractionCancelsStructureThroughTheDepth)
+{
+  const unsigned                  columns = 120, rows = 80, layers = 7; // offsets -3 .. 3
+  std::mt19937                    random(7);
+  std::normal_distribution<float> normal(0.0f, 1.0f);
+  std::vector<float>              structure(columns * rows), noise(columns * rows * layers);
+  for (float & s : structure)
+  {
+    s = 4.0f * normal(random);
+  }
+  for (float & n : noise)
+  {
+    n = 0.3f * normal(random);
+  }
+  auto       inkAt = [](unsigned x, unsigned y) { return (x / 10) % 3 == 0 && y > 20 && y < 60; };
+  const auto stack = MakeStack(columns, rows, layers, [&](unsigned x, unsigned y, unsigned k) {
+    const float sheet = k >= 1 && k <= 5 ? 10.0f + structure[y * columns + x] : 0.0f; // offsets -2 .. 2
+    const float ink = k == 5 && inkAt(x, y) ? 8.0f : 0.0f;                            // offset 2
+    return sheet + ink + noise[(k * rows + y) * columns + x];
+  });
+  const auto truth = MakeTexture(columns, rows, 1.0, [&](unsigned x, unsigned y) { return inkAt(x, y) ? 1.0f : 0.0f; });
+  const auto plain = LST::Combine(stack, layers, 1.0, 0.0, Side::Both, Side::Positive, Filter::Max, 1.0, 0.0);
+  const auto cored = LST::Combine(stack, layers, 1.0, 0.0, Side::Both, Side::Positive, Filter::Max, 1.0, 0.5);
+  const auto back = LST::Combine(stack, layers, 1.0, 0.0, Side::Both, Side::Negative, Filter::Max, 1.0, 0.5);
+  EXPECT_LT(Correlation(plain, truth), 0.7);
+  EXPECT_GT(Correlation(cored, truth), 0.95);
+  EXPECT_GT(LST::InkContrast(cored), LST::InkContrast(plain));
+  EXPECT_GT(LST::InkContrast(cored), LST::InkContrast(back));
+  EXPECT_LT(std::abs(Correlation(back, truth)), 0.1);
+}
+
+TEST(LayerStackTexture, InkContrastOfKnownDistributions)
+{
+  std::mt19937                    random(3);
+  std::normal_distribution<float> normal(0.0f, 2.0f);
+  // Gaussian: the 99th percentile lies 2.326 sigma above the median.
+  const auto gaussian = MakeTexture(300, 300, 1.0, [&](unsigned, unsigned) { return normal(random); });
+  EXPECT_NEAR(LST::InkContrast(gaussian), 2.326, 0.1);
+  // Five percent of the pixels 10 sigma brighter: the score follows them.
+  const auto inked =
+    MakeTexture(300, 300, 1.0, [&](unsigned x, unsigned) { return normal(random) + (x % 20 == 0 ? 20.0f : 0.0f); });
+  EXPECT_GT(LST::InkContrast(inked), 8.0);
+  // NaN pixels take no part; too few finite pixels or no spread score 0.
+  const auto holed = MakeTexture(300, 300, 1.0, [&](unsigned x, unsigned) { return x < 150 ? NaN : normal(random); });
+  EXPECT_NEAR(LST::InkContrast(holed), 2.326, 0.15);
+  EXPECT_EQ(LST::InkContrast(MakeTexture(3, 3, 1.0, [](unsigned x, unsigned y) { return x + y == 0 ? 1.0f : NaN; })),
+            0.0);
+  EXPECT_EQ(LST::InkContrast(MakeTexture(3, 3, 1.0, [](unsigned, unsigned) { return 4.0f; })), 0.0);
+  EXPECT_THROW(LST::InkContrast(nullptr), itk::ExceptionObject);
+}
+
+TEST(LayerStackTexture, SmoothIsNormalisedAndKeepsTheSheet)
+{
+  // A constant sheet with holes stays exactly constant; the holes stay holes.
+  const auto holed =
+    MakeTexture(40, 30, 0.5, [](unsigned x, unsigned y) { return (x * 7 + y * 3) % 11 == 0 ? NaN : 5.0f; });
+  const auto smoothed = LST::Smooth(holed, 1.0);
+  for (unsigned y = 0; y < 30; ++y)
+  {
+    for (unsigned x = 0; x < 40; ++x)
+    {
+      if (std::isnan(At(holed, x, y)))
+      {
+        EXPECT_TRUE(std::isnan(At(smoothed, x, y)));
+      }
+      else
+      {
+        EXPECT_NEAR(At(smoothed, x, y), 5.0f, 1e-5f);
+      }
+    }
+  }
+  // An impulse spreads into a Gaussian of the given physical sigma (2 pixels here).
+  const auto impulse =
+    MakeTexture(41, 41, 0.5, [](unsigned x, unsigned y) { return x == 20 && y == 20 ? 1.0f : 0.0f; });
+  const auto   spread = LST::Smooth(impulse, 1.0);
+  const double peak = At(spread, 20, 20);
+  EXPECT_NEAR(At(spread, 22, 20) / peak, std::exp(-0.5), 0.01);
+  EXPECT_NEAR(At(spread, 20, 18) / peak, std::exp(-0.5), 0.01);
+  double sum = 0.0;
+  for (size_t k = 0; k < 41 * 41; ++k)
+  {
+    sum += spread->GetBufferPointer()[k];
+  }
+  EXPECT_NEAR(sum, 1.0, 0.01);
+  // Sigma 0 copies.
+  EXPECT_EQ(At(LST::Smooth(impulse, 0.0), 20, 20), 1.0f);
+  EXPECT_THROW(LST::Smooth(impulse, -1.0), itk::ExceptionObject);
+  EXPECT_THROW(LST::Smooth(nullptr, 1.0), itk::ExceptionObject);
+}
+
+TEST(LayerStackTexture, MedianRemovesSpecksAndKeepsEdges)
+{
+  // A step edge with single-pixel specks on both sides, a NaN hole, 0.5 mm pixels.
+  auto value = [](unsigned x, unsigned y) {
+    if (x == 4 && y == 4)
+    {
+      return NaN;
+    }
+    const float base = x < 10 ? 0.0f : 10.0f;
+    return (x == 5 && y == 7) || (x == 14 && y == 3) ? 10.0f - base : base;
+  };
+  const auto texture = MakeTexture(20, 12, 0.5, value);
+  const auto median = LST::Median(texture, 0.5); // 3 x 3
+  EXPECT_EQ(At(median, 5, 7), 0.0f);
+  EXPECT_EQ(At(median, 14, 3), 10.0f);
+  EXPECT_EQ(At(median, 9, 5), 0.0f); // the edge stays where it was
+  EXPECT_EQ(At(median, 10, 5), 10.0f);
+  EXPECT_TRUE(std::isnan(At(median, 4, 4)));
+  EXPECT_EQ(At(median, 0, 0), 0.0f);
+  const auto ramp = MakeTexture(5, 5, 1.0, [](unsigned x, unsigned y) { return float(x + 5 * y); });
+  EXPECT_EQ(At(LST::Median(ramp, 1.0), 2, 2), 12.0f);
+  EXPECT_EQ(At(LST::Median(ramp, 1.0), 0, 0), 3.0f); // 0, 1, 5, 6: mean of 1 and 5
+  // Less than half a pixel: a copy.
+  EXPECT_EQ(At(LST::Median(texture, 0.2), 5, 7), 10.0f);
+  EXPECT_THROW(LST::Median(texture, -1.0), itk::ExceptionObject);
+}
+
+TEST(LayerStackTexture, TrimBorderRemovesRingsInsideTheSheetsEdge)
+{
+  // 1 mm pixels: the edge lies half a pixel beyond the outer pixel centres, so a width of
+  // 1 mm takes one ring, 1.6 mm two; a hole is an edge too.
+  const auto texture = MakeTexture(20, 12, 1.0, [](unsigned x, unsigned y) { return x == 10 && y == 6 ? NaN : 1.0f; });
+  const auto one = LST::TrimBorder(texture, 1.0);
+  EXPECT_TRUE(std::isnan(At(one, 0, 5)));
+  EXPECT_TRUE(std::isnan(At(one, 19, 5)));
+  EXPECT_TRUE(std::isnan(At(one, 5, 11)));
+  EXPECT_FALSE(std::isnan(At(one, 1, 5)));
+  EXPECT_TRUE(std::isnan(At(one, 9, 6)));
+  EXPECT_FALSE(std::isnan(At(one, 8, 6)));
+  const auto two = LST::TrimBorder(texture, 1.6);
+  EXPECT_TRUE(std::isnan(At(two, 1, 5)));
+  EXPECT_FALSE(std::isnan(At(two, 2, 5)));
+  EXPECT_FALSE(std::isnan(At(LST::TrimBorder(texture, 0.0), 0, 0)));
+  EXPECT_THROW(LST::TrimBorder(texture, -1.0), itk::ExceptionObject);
+}
