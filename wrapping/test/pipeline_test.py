@@ -51,7 +51,8 @@ assert tuple(volume.GetLargestPossibleRegion().GetSize()) == tuple(
 result = vu_pipeline.unwrap(volume)
 surface, flat = result["surface"], result["flat"]
 print(f"[ figures ] mesh {surface.GetNumberOfPoints()} points, {surface.GetNumberOfCells()} cells; "
-      f"sheet thickness {result['surface_filter'].GetSheetThickness():.3f} mm; {result['layers']} layers")
+      f"sheet thickness {result['surface_filter'].GetSheetThickness():.3f} mm; {result['layers']} layers; "
+      f"chosen texture {result['chosen']}")
 assert surface.GetNumberOfPoints() == flat.GetNumberOfPoints()
 
 # Mesh accuracy against the ground truth and distortion of the flattening.
