@@ -165,6 +165,9 @@ build_module() {
     -DITK_DIR="$itk_build" \
     -DBUILD_TESTING=ON \
     -DVirtualUnwrapping_WRAPPING_TESTS_ONLY=ON \
+    -DITK_USE_CLANG_FORMAT=OFF \
+    -DITK_USE_KWSTYLE=OFF \
+    -DITK_FORBID_DOWNLOADS=ON \
     -DVirtualUnwrapping_TOOL="$tool" \
     -DPython3_EXECUTABLE="$python" >"$root/module-configure.log" 2>&1 ||
     die "module configure failed; see $root/module-configure.log"
