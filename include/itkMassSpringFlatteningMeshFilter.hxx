@@ -109,11 +109,10 @@ MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::GenerateData()
   m_CurrentSystem = nullptr;
   m_Report = flattener.GetReport();
 
-  auto             result = SheetMeshToMesh<OutputMeshType>(flat);
+  // Built in place (a QuadEdgeMesh must not share its cells with a temporary mesh); the
+  // sheet grid (and whatever else the input carries) describes the flat mesh as well.
   OutputMeshType * output = this->GetOutput();
-  output->Graft(result);
-  // Graft leaves meta-data behind; the sheet grid (and whatever else the input carries)
-  // describes the flat mesh as well.
+  SheetMeshIntoMesh(flat, output);
   output->SetMetaDataDictionary(input->GetMetaDataDictionary());
   // Point data travels with the points, which keep their order.
   if (input->GetPointData() != nullptr && input->GetPointData()->Size() == input->GetNumberOfPoints())

@@ -124,14 +124,20 @@ MeshToSheetMesh(const TMesh * mesh)
   return sheet;
 }
 
-/** Builds an itk::Mesh or itk::QuadEdgeMesh from plain arrays; the sheet grid, if any,
- * goes into the mesh's meta-data dictionary. */
+/** Fills `mesh` (an itk::Mesh or itk::QuadEdgeMesh, emptied first) with the points and
+ * triangles of plain arrays; the sheet grid, if any, goes into its meta-data dictionary.
+ * Filters build their output in place with it: a QuadEdgeMesh deletes its cells when it
+ * is destroyed, so its containers must not be shared with a temporary mesh. */
 template <typename TMesh>
-typename TMesh::Pointer
-SheetMeshToMesh(const SheetMesh & sheet)
+void
+SheetMeshIntoMesh(const SheetMesh & sheet, TMesh * mesh)
 {
   static_assert(TMesh::PointDimension == 3, "sheet meshes are 3D");
-  auto mesh = TMesh::New();
+  if (mesh == nullptr)
+  {
+    itkGenericExceptionMacro(<< "SheetMeshIntoMesh: no mesh given");
+  }
+  mesh->Initialize();
   mesh->GetPoints()->Reserve(sheet.GetNumberOfPoints());
   for (size_t i = 0; i < sheet.GetNumberOfPoints(); ++i)
   {
@@ -168,6 +174,15 @@ SheetMeshToMesh(const SheetMesh & sheet)
     EncapsulateMetaData(dict, SheetMeshGridRowsKey, sheet.GridRows);
     EncapsulateMetaData(dict, SheetMeshGridColumnsKey, sheet.GridColumns);
   }
+}
+
+/** Builds an itk::Mesh or itk::QuadEdgeMesh from plain arrays (see SheetMeshIntoMesh). */
+template <typename TMesh>
+typename TMesh::Pointer
+SheetMeshToMesh(const SheetMesh & sheet)
+{
+  auto mesh = TMesh::New();
+  SheetMeshIntoMesh(sheet, mesh.GetPointer());
   return mesh;
 }
 

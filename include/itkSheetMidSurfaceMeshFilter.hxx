@@ -199,11 +199,9 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   }
   m_SheetMesh = std::move(sheet);
 
-  typename OutputMeshType::Pointer mesh = SheetMeshToMesh<OutputMeshType>(m_SheetMesh);
-  OutputMeshType *                 output = this->GetOutput();
-  output->SetPoints(mesh->GetPoints());
-  output->SetCells(mesh->GetCells());
-  output->SetMetaDataDictionary(mesh->GetMetaDataDictionary());
+  // Built in place: a QuadEdgeMesh must not share its cells with a temporary mesh (it
+  // deletes them when it is destroyed).
+  SheetMeshIntoMesh(m_SheetMesh, this->GetOutput());
   this->UpdateProgress(1.0f);
 }
 

@@ -116,10 +116,22 @@ restrict_wrapping() {
       changed=1
     fi
   done < <(find "$src_dir/Modules" -name itk-module.cmake)
+  remove_stale_indexes
   if ((changed)) && [[ -f "$itk_build/CMakeCache.txt" ]]; then
     log "wrapping restricted to the modules this module needs: reconfiguring"
     cmake "$itk_build" >>"$root/itk-configure.log" 2>&1 || die "ITK reconfigure failed; see $root/itk-configure.log"
   fi
+}
+
+remove_stale_indexes() {
+  # A module wrapped by an earlier configuration leaves its master index (.mdx) behind; an
+  # external module's wrapping would then list it as wrapped and look for its typedefs.
+  local file dir
+  while IFS= read -r file; do
+    dir="$(dirname "$file")"
+    [[ -d "$dir/wrapping.vu-not-wrapped" ]] || continue
+    rm -f "$itk_build/Wrapping/Typedefs/$(sed -n 's/^ *itk_module( *\([A-Za-z0-9]*\).*/\1/p' "$file" | head -1).mdx"
+  done < <(find "$src_dir/Modules" -name itk-module.cmake)
 }
 
 configure_itk() {
@@ -160,6 +172,7 @@ build_itk() {
 }
 
 build_module() {
+  remove_stale_indexes
   cmake -S "$here" -B "$module_build" \
     -DCMAKE_BUILD_TYPE=Release \
     -DITK_DIR="$itk_build" \
@@ -167,6 +180,8 @@ build_module() {
     -DVirtualUnwrapping_WRAPPING_TESTS_ONLY=ON \
     -DITK_USE_CLANG_FORMAT=OFF \
     -DITK_USE_KWSTYLE=OFF \
+    -DITK_USE_SYSTEM_SWIG=ON \
+    -DITK_USE_SYSTEM_CASTXML=ON \
     -DITK_FORBID_DOWNLOADS=ON \
     -DVirtualUnwrapping_TOOL="$tool" \
     -DPython3_EXECUTABLE="$python" >"$root/module-configure.log" 2>&1 ||

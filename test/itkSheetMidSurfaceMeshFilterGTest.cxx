@@ -16,8 +16,10 @@
  *
  *=========================================================================*/
 #include "itkFlatteningDistortionCalculator.h"
+#include "itkMassSpringFlatteningMeshFilter.h"
 #include "itkMassSpringSheetFlattener.h"
 #include "itkMeshFileWriter.h"
+#include "itkQuadEdgeMesh.h"
 #include "itkSheetMeshErrorCalculator.h"
 #include "itkSheetMidSurfaceMeshFilter.h"
 #include "itkSheetPhantomSource.h"
@@ -378,4 +380,37 @@ TEST(SheetMidSurfaceMeshFilter, EveryOtherPresetMeshFlattens)
     EXPECT_LT(distortion->GetEdgeStrainP95(), 0.01) << preset;
     EXPECT_EQ(distortion->GetNumberOfFlippedTriangles(), 0u) << preset;
   }
+}
+
+// A QuadEdgeMesh deletes its cells when it is destroyed: the filters must build their
+// outputs in place, not share containers with a temporary mesh (this crashed in Python).
+TEST(SheetMidSurfaceMeshFilter, QuadEdgeMeshOutputFlattensThroughTheFilter)
+{
+  using VolumeType = itk::Image<float, 3>;
+  using MaskType = itk::Image<unsigned char, 3>;
+  using QEMesh = itk::QuadEdgeMesh<double, 3>;
+  auto source = itk::SheetPhantomSource::New();
+  source->SetNumberOfTurns(1.5);
+  source->SetSheetWidth(5.0);
+  source->SetGlyphHeight(1.0);
+  source->SetText("AB");
+  auto segmentation = itk::SheetSegmentationImageFilter<VolumeType, MaskType>::New();
+  segmentation->SetInput(source->GetOutput());
+  auto surfaceFilter = itk::SheetMidSurfaceMeshFilter<MaskType, QEMesh>::New();
+  surfaceFilter->SetInput(segmentation->GetOutput());
+  surfaceFilter->SetIntensityImage(source->GetOutput());
+  auto flattening = itk::MassSpringFlatteningMeshFilter<QEMesh, QEMesh>::New();
+  flattening->SetInput(surfaceFilter->GetOutput());
+  ASSERT_NO_THROW(flattening->Update());
+  const QEMesh * surface = surfaceFilter->GetOutput();
+  const QEMesh * flat = flattening->GetOutput();
+  ASSERT_GT(surface->GetNumberOfPoints(), 100u);
+  EXPECT_EQ(flat->GetNumberOfPoints(), surface->GetNumberOfPoints());
+  EXPECT_EQ(flat->GetNumberOfFaces(), surface->GetNumberOfFaces());
+  auto distortion = itk::FlatteningDistortionCalculator::New();
+  distortion->SetSurfaceMesh(surface);
+  distortion->SetFlatMesh(flat);
+  distortion->Compute();
+  EXPECT_LT(distortion->GetEdgeStrainP95(), 0.01);
+  EXPECT_EQ(distortion->GetNumberOfFlippedTriangles(), 0u);
 }

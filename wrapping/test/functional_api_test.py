@@ -15,7 +15,7 @@ output_dir = sys.argv[1]
 os.makedirs(output_dir, exist_ok=True)
 
 # A small rolled phantom, made by the functional form of the source.
-volume = itk.sheet_phantom_source(number_of_turns=1.5, sheet_width=2.0, voxel_size=0.1, text="AB")
+volume = itk.sheet_phantom_source(number_of_turns=1.5, sheet_width=5.0, glyph_height=1.0, voxel_size=0.1, text="AB")
 assert isinstance(volume, itk.Image[itk.F, 3]), type(volume)
 array = itk.array_view_from_image(volume)
 assert array.ndim == 3 and np.isfinite(array).all()

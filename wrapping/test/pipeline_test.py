@@ -95,12 +95,15 @@ assert numpy_ncc >= 0.85, numpy_ncc
 
 # 5. The C++ tool on the same series must agree.
 if tool:
+    # The tool links the system's ITK: run it without the test driver's library path, which
+    # points at the Python build's ITK.
+    tool_env = {k: v for k, v in os.environ.items() if k not in ("LD_LIBRARY_PATH", "PYTHONPATH")}
     tool_out = os.path.join(output_dir, "tool")
     truth_dir = os.path.join(output_dir, "truth")
     subprocess.run([tool, "phantom", "standard", "-o", truth_dir, "--force"], check=True,
-                   stdout=subprocess.DEVNULL)
+                   stdout=subprocess.DEVNULL, env=tool_env)
     subprocess.run([tool, "unwrap", series_dir, "-o", tool_out, "--ground-truth", truth_dir], check=True,
-                   stdout=subprocess.DEVNULL)
+                   stdout=subprocess.DEVNULL, env=tool_env)
     with open(os.path.join(tool_out, "report.json")) as f:
         tool_ncc = json.load(f)["legibility"]["texture_ncc"]
     print(f"[ figures ] C++ tool texture NCC {tool_ncc:.4f}; difference {abs(tool_ncc - ncc):.4f}")
