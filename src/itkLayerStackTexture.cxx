@@ -16,8 +16,8 @@
  *
  *=========================================================================*/
 #include "itkLayerStackTexture.h"
+#include "vuValidRegion.h"
 
-#include "itkSignedMaurerDistanceMapImageFilter.h"
 
 #include <algorithm>
 #include <cmath>
@@ -330,7 +330,6 @@ LayerStackTexture::TrimBorder(const TextureType * texture, double width)
     itkGenericExceptionMacro(<< "LayerStackTexture::TrimBorder: the width must be >= 0 and finite, got " << width);
   }
   auto          result = NewTexture(texture);
-  const auto    size = texture->GetBufferedRegion().GetSize();
   const float * in = texture->GetBufferPointer();
   float *       out = result->GetBufferPointer();
   std::copy(in, in + texture->GetBufferedRegion().GetNumberOfPixels(), out);
@@ -338,40 +337,20 @@ LayerStackTexture::TrimBorder(const TextureType * texture, double width)
   {
     return result;
   }
-  // Distance of every pixel centre to the nearest non-finite pixel centre, with a ring of
-  // non-finite pixels around the image.
+  // Pixels within `width` of the edge of the finite region become NaN.
   using MaskType = Image<unsigned char, 2>;
-  auto               outside = MaskType::New();
-  MaskType::SizeType paddedSize = { { size[0] + 2, size[1] + 2 } };
-  outside->SetRegions(paddedSize);
-  outside->SetSpacing(texture->GetSpacing());
-  outside->Allocate();
-  outside->FillBuffer(1);
-  unsigned char * mask = outside->GetBufferPointer();
-  for (SizeValueType y = 0; y < size[1]; ++y)
+  auto finite = MaskType::New();
+  finite->SetRegions(texture->GetBufferedRegion());
+  finite->SetSpacing(texture->GetSpacing());
+  finite->Allocate();
+  const SizeValueType n = texture->GetBufferedRegion().GetNumberOfPixels();
+  std::transform(in, in + n, finite->GetBufferPointer(), [](float v) { return std::isfinite(v) ? 1 : 0; });
+  const std::vector<float> inside = detail::DistanceInsideValidRegion(finite);
+  for (SizeValueType k = 0; k < n; ++k)
   {
-    for (SizeValueType x = 0; x < size[0]; ++x)
+    if (inside[k] < width)
     {
-      mask[(y + 1) * paddedSize[0] + x + 1] = std::isfinite(in[y * size[0] + x]) ? 0 : 1;
-    }
-  }
-  auto distance = SignedMaurerDistanceMapImageFilter<MaskType, Image<float, 2>>::New();
-  distance->SetInput(outside);
-  distance->SetBackgroundValue(0);
-  distance->SetUseImageSpacing(true);
-  distance->SetSquaredDistance(false);
-  distance->SetInsideIsPositive(false);
-  distance->Update();
-  const float * d = distance->GetOutput()->GetBufferPointer();
-  const double  halfPixel = 0.5 * std::min(texture->GetSpacing()[0], texture->GetSpacing()[1]);
-  for (SizeValueType y = 0; y < size[1]; ++y)
-  {
-    for (SizeValueType x = 0; x < size[0]; ++x)
-    {
-      if (d[(y + 1) * paddedSize[0] + x + 1] - halfPixel < width)
-      {
-        out[y * size[0] + x] = NaN;
-      }
+      out[k] = NaN;
     }
   }
   return result;

@@ -387,33 +387,44 @@ GatherSpringForce(size_t             i,
 }
 
 // The collision plane for one particle: pushed back onto the plane, and the paper's
-// response V_new = V_old - (1 + k_r)(V_old . N) N; a rebound slower than restingSpeed
+// response V_new = V_old - (1 + k_r)(V_old . N) N; a rebound slower than RestingSpeed
 // comes to rest instead (it would only start an endless micro-bounce).
-inline void
-CollideWithPlane(double *     xi,
-                 double *     vi,
-                 const double point[3],
-                 const double N[3],
-                 double       restitution,
-                 double       restingSpeed)
+struct PlaneContact
 {
-  const double depth = (xi[0] - point[0]) * N[0] + (xi[1] - point[1]) * N[1] + (xi[2] - point[2]) * N[2];
-  if (depth < 0.0)
+  bool   HasPlane;
+  double Point[3];
+  double N[3];
+  double Restitution;
+  double RestingSpeed;
+
+  inline void
+  Collide(double * xi, double * vi) const
   {
-    for (int d = 0; d < 3; ++d)
+    const double depth = (xi[0] - Point[0]) * N[0] + (xi[1] - Point[1]) * N[1] + (xi[2] - Point[2]) * N[2];
+    if (depth < 0.0)
     {
-      xi[d] -= depth * N[d];
-    }
-    const double vn = vi[0] * N[0] + vi[1] * N[1] + vi[2] * N[2];
-    if (vn < 0.0)
-    {
-      const double rebound = -restitution * vn <= restingSpeed ? 0.0 : restitution;
       for (int d = 0; d < 3; ++d)
       {
-        vi[d] -= (1.0 + rebound) * vn * N[d];
+        xi[d] -= depth * N[d];
+      }
+      const double vn = vi[0] * N[0] + vi[1] * N[1] + vi[2] * N[2];
+      if (vn < 0.0)
+      {
+        const double rebound = -Restitution * vn <= RestingSpeed ? 0.0 : Restitution;
+        for (int d = 0; d < 3; ++d)
+        {
+          vi[d] -= (1.0 + rebound) * vn * N[d];
+        }
       }
     }
   }
+};
+
+template <typename TVector>
+PlaneContact
+MakePlaneContact(bool hasPlane, const TVector & point, const TVector & normal, double restitution, double restingSpeed)
+{
+  return { hasPlane, { point[0], point[1], point[2] }, { normal[0], normal[1], normal[2] }, restitution, restingSpeed };
 }
 } // namespace
 
@@ -468,12 +479,8 @@ MassSpringSystem::ComputeAccelerations(const std::vector<double> & x,
 void
 MassSpringSystem::ApplyConstraintsAndCollisions(double * x, double * v)
 {
-  const uint8_t * locked = m_Locked.data();
-  const bool      hasPlane = m_HasPlane;
-  const double    point[3] = { m_PlanePoint[0], m_PlanePoint[1], m_PlanePoint[2] };
-  const double    N[3] = { m_PlaneNormal[0], m_PlaneNormal[1], m_PlaneNormal[2] };
-  const double    restitution = m_Restitution;
-  const double    restingSpeed = RestingSpeed();
+  const uint8_t *    locked = m_Locked.data();
+  const PlaneContact plane = MakePlaneContact(m_HasPlane, m_PlanePoint, m_PlaneNormal, m_Restitution, RestingSpeed());
   ParallelFor(m_Masses.size(), [=](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
     {
@@ -481,9 +488,9 @@ MassSpringSystem::ApplyConstraintsAndCollisions(double * x, double * v)
       {
         v[3 * i] = v[3 * i + 1] = v[3 * i + 2] = 0.0;
       }
-      else if (hasPlane)
+      else if (plane.HasPlane)
       {
-        CollideWithPlane(x + 3 * i, v + 3 * i, point, N, restitution, restingSpeed);
+        plane.Collide(x + 3 * i, v + 3 * i);
       }
     }
   });
@@ -509,21 +516,17 @@ MassSpringSystem::StepEulerFused(bool symplectic)
   }
   std::vector<double> & next = m_Scratch[1];
   next.resize(m_X.size());
-  const double *    x = m_X.data();
-  double *          xn = next.data();
-  double *          v = m_V.data();
-  const double      h = m_TimeStep;
-  const double      c = m_Damping;
-  const Vector3     g = m_Gravity;
-  const uint64_t *  start = m_AdjacencyStart.data();
-  const Neighbour * adjacency = m_Adjacency.data();
-  const double *    masses = m_Masses.data();
-  const uint8_t *   locked = m_Locked.data();
-  const bool        hasPlane = m_HasPlane;
-  const double      point[3] = { m_PlanePoint[0], m_PlanePoint[1], m_PlanePoint[2] };
-  const double      N[3] = { m_PlaneNormal[0], m_PlaneNormal[1], m_PlaneNormal[2] };
-  const double      restitution = m_Restitution;
-  const double      restingSpeed = RestingSpeed();
+  const double *     x = m_X.data();
+  double *           xn = next.data();
+  double *           v = m_V.data();
+  const double       h = m_TimeStep;
+  const double       c = m_Damping;
+  const Vector3      g = m_Gravity;
+  const uint64_t *   start = m_AdjacencyStart.data();
+  const Neighbour *  adjacency = m_Adjacency.data();
+  const double *     masses = m_Masses.data();
+  const uint8_t *    locked = m_Locked.data();
+  const PlaneContact plane = MakePlaneContact(m_HasPlane, m_PlanePoint, m_PlaneNormal, m_Restitution, RestingSpeed());
   ParallelFor(m_Masses.size(), [=](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i)
     {
@@ -555,9 +558,9 @@ MassSpringSystem::StepEulerFused(bool symplectic)
           vi[d] += h * a;
         }
       }
-      if (hasPlane)
+      if (plane.HasPlane)
       {
-        CollideWithPlane(xni, vi, point, N, restitution, restingSpeed);
+        plane.Collide(xni, vi);
       }
     }
   });

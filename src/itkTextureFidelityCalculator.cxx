@@ -16,6 +16,7 @@
  *
  *=========================================================================*/
 #include "itkTextureFidelityCalculator.h"
+#include "vuValidRegion.h"
 
 #include "itkCorrelationImageToImageMetricv4.h"
 #include "itkExhaustiveOptimizerv4.h"
@@ -27,7 +28,6 @@
 #include "itkRegistrationParameterScalesFromPhysicalShift.h"
 #include "itkRegularStepGradientDescentOptimizerv4.h"
 #include "itkResampleImageFilter.h"
-#include "itkSignedMaurerDistanceMapImageFilter.h"
 
 #include <algorithm>
 #include <cmath>
@@ -124,48 +124,16 @@ Prepare(const ImageType * image, const MaskType * mask, const char * what)
 MaskType::Pointer
 ErodeMask(const MaskType * mask, double border)
 {
-  const MaskType::RegionType region = mask->GetBufferedRegion();
-  const auto                 size = region.GetSize();
-  // One ring of invalid pixels around the image, so that its border counts as an edge.
-  auto               padded = MaskType::New();
-  MaskType::SizeType paddedSize = { { size[0] + 2, size[1] + 2 } };
-  padded->SetRegions(paddedSize);
-  padded->SetSpacing(mask->GetSpacing());
-  padded->Allocate();
-  padded->FillBuffer(1);
-  const unsigned char * in = mask->GetBufferPointer();
-  unsigned char *       invalid = padded->GetBufferPointer();
-  for (SizeValueType y = 0; y < size[1]; ++y)
-  {
-    for (SizeValueType x = 0; x < size[0]; ++x)
-    {
-      invalid[(y + 1) * paddedSize[0] + x + 1] = in[y * size[0] + x] != 0 ? 0 : 1;
-    }
-  }
-  // Distance of every valid pixel centre to the nearest invalid pixel centre.
-  using DistanceType = Image<float, 2>;
-  auto distance = SignedMaurerDistanceMapImageFilter<MaskType, DistanceType>::New();
-  distance->SetInput(padded);
-  distance->SetBackgroundValue(0);
-  distance->SetUseImageSpacing(true);
-  distance->SetSquaredDistance(false);
-  distance->SetInsideIsPositive(false);
-  distance->Update();
-  const float * d = distance->GetOutput()->GetBufferPointer();
-  const double  halfPixel = 0.5 * std::min(mask->GetSpacing()[0], mask->GetSpacing()[1]);
-
-  auto eroded = MaskType::New();
+  const std::vector<float> inside = detail::DistanceInsideValidRegion(mask);
+  const unsigned char *    in = mask->GetBufferPointer();
+  auto                     eroded = MaskType::New();
   eroded->CopyInformation(mask);
-  eroded->SetRegions(region);
+  eroded->SetRegions(mask->GetBufferedRegion());
   eroded->Allocate();
   unsigned char * out = eroded->GetBufferPointer();
-  for (SizeValueType y = 0; y < size[1]; ++y)
+  for (size_t k = 0; k < inside.size(); ++k)
   {
-    for (SizeValueType x = 0; x < size[0]; ++x)
-    {
-      const SizeValueType k = y * size[0] + x;
-      out[k] = in[k] != 0 && d[(y + 1) * paddedSize[0] + x + 1] - halfPixel >= border ? 1 : 0;
-    }
+    out[k] = in[k] != 0 && inside[k] >= border ? 1 : 0;
   }
   return eroded;
 }
