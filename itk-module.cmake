@@ -26,6 +26,9 @@ itk_module(VirtualUnwrapping
     ITKImageFunction
     ITKImageIntensity
     ITKImageNoise
+    ITKImageFeature
+    ITKImageSources
+    ITKDeconvolution
     ITKSmoothing
     ITKThresholding
     ITKImageStatistics

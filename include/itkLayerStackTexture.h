@@ -46,6 +46,23 @@ namespace itk {
  *   Ink is denser than the sheet and covers a small part of it, so the texture that shows
  *   it best scores highest; structure and noise raise the spread and lower the score.
  *   Returns 0 when fewer than 2 pixels are finite or the spread is 0.
+ * - NoiseSpread(): 1.4826 x the median absolute deviation of the finite pixels (the
+ *   standard deviation for Gaussian noise): the spread of the sheet's background, which
+ *   covers most of a texture; 0 when fewer than 2 pixels are finite.
+ * - EdgePreservingSmooth(): ITK's BilateralImageFilter, a Gaussian of standard deviation
+ *   domainSigma (physical units; 0 returns a copy) weighted by a Gaussian of the
+ *   difference in value of standard deviation rangeSigma (> 0): averages the noise of the
+ *   background and of the ink and keeps the edges between them, where differences are
+ *   large. A range sigma of about twice NoiseSpread() suits textures with sharp ink.
+ *   NaN pixels neither contribute nor change.
+ * - Deconvolve(): undoes a Gaussian blur of standard deviation psfSigma (physical units;
+ *   0 returns a copy) with ITK's TikhonovDeconvolutionImageFilter and the given
+ *   regularization (> 0; relative to the PSF's unit gain: larger is smoother), scaled
+ *   by 1 + regularization so that flat regions keep their value. For a scan
+ *   with a Gaussian PSF of full width at half maximum F and voxels of size v, sampled
+ *   with linear interpolation, the texture is blurred by about
+ *   sqrt((F / 2.355)^2 + v^2 / 12) before interpolation. NaN pixels are filled with the
+ *   median of the finite ones for the transform and stay NaN.
  * - Smooth(): Gaussian of standard deviation sigma (physical units, 0 returns a copy) by
  *   normalised convolution: NaN pixels neither contribute nor change.
  * - Median(): median of the finite pixels in the square of half-side `radius` (physical
@@ -79,6 +96,15 @@ public:
 
   static double
   InkContrast(const TextureType * texture);
+
+  static double
+  NoiseSpread(const TextureType * texture);
+
+  static TextureType::Pointer
+  EdgePreservingSmooth(const TextureType * texture, double domainSigma, double rangeSigma);
+
+  static TextureType::Pointer
+  Deconvolve(const TextureType * texture, double psfSigma, double regularization);
 
   static TextureType::Pointer
   Smooth(const TextureType * texture, double sigma);

@@ -16,8 +16,10 @@
  *
  *=========================================================================*/
 #include "itkLayerStackTexture.h"
+#include "itkBilateralImageFilter.h"
+#include "itkGaussianImageSource.h"
+#include "itkTikhonovDeconvolutionImageFilter.h"
 #include "vuValidRegion.h"
-
 
 #include <algorithm>
 #include <cmath>
@@ -39,6 +41,74 @@ NewTexture(const TextureType * like)
   texture->SetRegions(like->GetBufferedRegion());
   texture->Allocate();
   return texture;
+}
+
+// The finite pixels' values.
+std::vector<float>
+FiniteValues(const TextureType * texture)
+{
+  const float *      buffer = texture->GetBufferPointer();
+  std::vector<float> values;
+  values.reserve(texture->GetBufferedRegion().GetNumberOfPixels());
+  for (SizeValueType k = 0; k < texture->GetBufferedRegion().GetNumberOfPixels(); ++k)
+  {
+    if (std::isfinite(buffer[k]))
+    {
+      values.push_back(buffer[k]);
+    }
+  }
+  return values;
+}
+
+// The value of rank q (0..1) of `values`, which it reorders.
+double
+Rank(std::vector<float> & values, double q)
+{
+  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * (values.size() - 1) + 0.5));
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
+}
+
+// 1.4826 x the median absolute deviation from `median` of `values` (reordered, changed).
+double
+Spread(std::vector<float> & values, double median)
+{
+  for (float & v : values)
+  {
+    v = std::abs(v - static_cast<float>(median));
+  }
+  return 1.4826 * Rank(values, 0.5);
+}
+
+// A copy of `texture` whose NaN pixels hold `fill`, and which pixels were NaN.
+TextureType::Pointer
+FilledCopy(const TextureType * texture, float fill, std::vector<bool> & wasNaN)
+{
+  auto          copy = NewTexture(texture);
+  const size_t  n = texture->GetBufferedRegion().GetNumberOfPixels();
+  const float * in = texture->GetBufferPointer();
+  float *       out = copy->GetBufferPointer();
+  wasNaN.assign(n, false);
+  for (size_t k = 0; k < n; ++k)
+  {
+    wasNaN[k] = !std::isfinite(in[k]);
+    out[k] = wasNaN[k] ? fill : in[k];
+  }
+  return copy;
+}
+
+// `result` (same grid as the input) with the input's NaN pixels NaN again.
+void
+RestoreNaN(TextureType * result, const std::vector<bool> & wasNaN)
+{
+  float * out = result->GetBufferPointer();
+  for (size_t k = 0; k < wasNaN.size(); ++k)
+  {
+    if (wasNaN[k])
+    {
+      out[k] = NaN;
+    }
+  }
 }
 
 void
@@ -169,33 +239,27 @@ double
 LayerStackTexture::InkContrast(const TextureType * texture)
 {
   CheckTexture(texture, "InkContrast");
-  const float *      buffer = texture->GetBufferPointer();
-  std::vector<float> values;
-  values.reserve(texture->GetBufferedRegion().GetNumberOfPixels());
-  for (SizeValueType k = 0; k < texture->GetBufferedRegion().GetNumberOfPixels(); ++k)
-  {
-    if (std::isfinite(buffer[k]))
-    {
-      values.push_back(buffer[k]);
-    }
-  }
+  std::vector<float> values = FiniteValues(texture);
   if (values.size() < 2)
   {
     return 0.0;
   }
-  const auto rank = [&values](double q) {
-    const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * (values.size() - 1) + 0.5));
-    std::nth_element(values.begin(), values.begin() + k, values.end());
-    return static_cast<double>(values[k]);
-  };
-  const double top = rank(0.99);
-  const double median = rank(0.5);
-  for (float & v : values)
-  {
-    v = std::abs(v - static_cast<float>(median));
-  }
-  const double spread = 1.4826 * rank(0.5);
+  const double top = Rank(values, 0.99);
+  const double median = Rank(values, 0.5);
+  const double spread = Spread(values, median);
   return spread > 0.0 ? (top - median) / spread : 0.0;
+}
+
+double
+LayerStackTexture::NoiseSpread(const TextureType * texture)
+{
+  CheckTexture(texture, "NoiseSpread");
+  std::vector<float> values = FiniteValues(texture);
+  if (values.size() < 2)
+  {
+    return 0.0;
+  }
+  return Spread(values, Rank(values, 0.5));
 }
 
 LayerStackTexture::TextureType::Pointer
@@ -317,6 +381,102 @@ LayerStackTexture::Median(const TextureType * texture, double radius)
       }
       out[y * size[0] + x] = median;
     }
+  }
+  return result;
+}
+
+LayerStackTexture::TextureType::Pointer
+LayerStackTexture::EdgePreservingSmooth(const TextureType * texture, double domainSigma, double rangeSigma)
+{
+  CheckTexture(texture, "EdgePreservingSmooth");
+  if (!(domainSigma >= 0.0) || !std::isfinite(domainSigma))
+  {
+    itkGenericExceptionMacro(
+      << "LayerStackTexture::EdgePreservingSmooth: the domain sigma must be >= 0 and finite, got " << domainSigma);
+  }
+  if (!(rangeSigma > 0.0) || !std::isfinite(rangeSigma))
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::EdgePreservingSmooth: the range sigma must be > 0 and finite, got "
+                             << rangeSigma);
+  }
+  std::vector<float> values = FiniteValues(texture);
+  if (domainSigma == 0.0 || values.empty())
+  {
+    return Smooth(texture, 0.0);
+  }
+  // ITK's bilateral filter gives no weight to neighbours more than 4 range sigmas away
+  // (its fixed RangeMu): NaN pixels are filled with a value 10 range sigmas above every
+  // finite one, so they neither contribute nor take anything from their neighbours.
+  using BilateralType = BilateralImageFilter<TextureType, TextureType>;
+  auto              bilateral = BilateralType::New();
+  const double      top = *std::max_element(values.begin(), values.end());
+  const float       far = static_cast<float>(top + 10.0 * rangeSigma + 1.0);
+  std::vector<bool> wasNaN;
+  auto              filled = FilledCopy(texture, far, wasNaN);
+  bilateral->SetInput(filled);
+  bilateral->SetDomainSigma(domainSigma);
+  bilateral->SetRangeSigma(rangeSigma);
+  bilateral->Update();
+  TextureType::Pointer result = bilateral->GetOutput();
+  result->DisconnectPipeline();
+  RestoreNaN(result, wasNaN);
+  return result;
+}
+
+LayerStackTexture::TextureType::Pointer
+LayerStackTexture::Deconvolve(const TextureType * texture, double psfSigma, double regularization)
+{
+  CheckTexture(texture, "Deconvolve");
+  if (!(psfSigma >= 0.0) || !std::isfinite(psfSigma))
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::Deconvolve: the PSF sigma must be >= 0 and finite, got "
+                             << psfSigma);
+  }
+  if (!(regularization > 0.0) || !std::isfinite(regularization))
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::Deconvolve: the regularization must be > 0 and finite, got "
+                             << regularization);
+  }
+  std::vector<float> values = FiniteValues(texture);
+  if (psfSigma == 0.0 || values.empty())
+  {
+    return Smooth(texture, 0.0);
+  }
+  // The transform needs every pixel: those off the sheet hold the sheet's median, which
+  // adds no edge at the sheet's outline.
+  std::vector<bool> wasNaN;
+  auto              filled = FilledCopy(texture, static_cast<float>(Rank(values, 0.5)), wasNaN);
+  // The PSF on the texture's grid, four sigmas each way, unit sum.
+  auto                                        psf = GaussianImageSource<TextureType>::New();
+  TextureType::SizeType                       size;
+  GaussianImageSource<TextureType>::ArrayType sigma, mean;
+  for (unsigned int d = 0; d < 2; ++d)
+  {
+    const double spacing = texture->GetSpacing()[d];
+    size[d] = 2 * static_cast<SizeValueType>(std::ceil(4.0 * psfSigma / spacing)) + 1;
+    sigma[d] = psfSigma;
+    mean[d] = 0.5 * (size[d] - 1) * spacing;
+  }
+  psf->SetSize(size);
+  psf->SetSpacing(texture->GetSpacing());
+  psf->SetSigma(sigma);
+  psf->SetMean(mean);
+  psf->SetScale(1.0);
+  psf->SetNormalized(true);
+  auto deconvolve = TikhonovDeconvolutionImageFilter<TextureType, TextureType, TextureType>::New();
+  deconvolve->SetInput(filled);
+  deconvolve->SetKernelImage(psf->GetOutput());
+  deconvolve->SetNormalize(true);
+  deconvolve->SetRegularizationConstant(regularization);
+  deconvolve->Update();
+  TextureType::Pointer result = deconvolve->GetOutput();
+  result->DisconnectPipeline();
+  // Tikhonov's filter has gain 1 / (1 + regularization) at zero frequency: undone, so
+  // flat regions keep their value.
+  float * out = result->GetBufferPointer();
+  for (size_t k = 0; k < wasNaN.size(); ++k)
+  {
+    out[k] = wasNaN[k] ? NaN : static_cast<float>(out[k] * (1.0 + regularization));
   }
   return result;
 }

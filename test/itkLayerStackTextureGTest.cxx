@@ -297,3 +297,130 @@ TEST(LayerStackTexture, TrimBorderRemovesRingsInsideTheSheetsEdge)
   EXPECT_FALSE(std::isnan(At(LST::TrimBorder(texture, 0.0), 0, 0)));
   EXPECT_THROW(LST::TrimBorder(texture, -1.0), itk::ExceptionObject);
 }
+
+TEST(LayerStackTexture, NoiseSpreadIsTheStandardDeviationOfTheBackground)
+{
+  std::mt19937                    random(5);
+  std::normal_distribution<float> normal(100.0f, 3.0f);
+  EXPECT_NEAR(
+    LST::NoiseSpread(MakeTexture(300, 300, 1.0, [&](unsigned, unsigned) { return normal(random); })), 3.0, 0.1);
+  // Ink on a tenth of the sheet raises it by about a tenth; NaN pixels take no part.
+  const auto inked = MakeTexture(
+    300, 300, 1.0, [&](unsigned x, unsigned) { return x < 30 ? NaN : normal(random) + (x % 10 == 0 ? 500.0f : 0.0f); });
+  EXPECT_NEAR(LST::NoiseSpread(inked), 3.0, 0.6);
+  EXPECT_EQ(LST::NoiseSpread(MakeTexture(3, 3, 1.0, [](unsigned x, unsigned y) { return x + y == 0 ? 1.0f : NaN; })),
+            0.0);
+  EXPECT_THROW(LST::NoiseSpread(nullptr), itk::ExceptionObject);
+}
+
+TEST(LayerStackTexture, EdgePreservingSmoothAveragesNoiseAndKeepsEdges)
+{
+  // A noisy step (0 | 100, noise 5) with a NaN hole next to the edge, 0.5 mm pixels.
+  std::mt19937                    random(7);
+  std::normal_distribution<float> normal(0.0f, 5.0f);
+  const auto                      clean = [](unsigned x) { return x < 30 ? 0.0f : 100.0f; };
+  const auto                      noisy = MakeTexture(
+    60, 40, 0.5, [&](unsigned x, unsigned y) { return x == 31 && y == 20 ? NaN : clean(x) + normal(random); });
+  const auto bilateral = LST::EdgePreservingSmooth(noisy, 1.0, 10.0);
+  const auto gaussian = LST::Smooth(noisy, 1.0);
+  double     noiseBefore = 0.0, noiseAfter = 0.0, edgeBilateral = 0.0, edgeGaussian = 0.0;
+  unsigned   flat = 0, edge = 0;
+  for (unsigned y = 0; y < 40; ++y)
+  {
+    for (unsigned x = 0; x < 60; ++x)
+    {
+      if (x == 31 && y == 20)
+      {
+        EXPECT_TRUE(std::isnan(At(bilateral, x, y)));
+        continue;
+      }
+      ASSERT_TRUE(std::isfinite(At(bilateral, x, y)));
+      const double truth = clean(x);
+      if ((x >= 5 && x < 25) || (x >= 35 && x < 55))
+      {
+        noiseBefore += std::pow(At(noisy, x, y) - truth, 2);
+        noiseAfter += std::pow(At(bilateral, x, y) - truth, 2);
+        ++flat;
+      }
+      if (x >= 28 && x < 32)
+      {
+        edgeBilateral += std::pow(At(bilateral, x, y) - truth, 2);
+        edgeGaussian += std::pow(At(gaussian, x, y) - truth, 2);
+        ++edge;
+      }
+    }
+  }
+  // The noise falls to under a third; at the edge the error stays far below a Gaussian's
+  // of the same width, which blurs the step over several pixels.
+  EXPECT_LT(std::sqrt(noiseAfter / flat), std::sqrt(noiseBefore / flat) / 3.0);
+  EXPECT_LT(std::sqrt(edgeBilateral / edge), 0.25 * std::sqrt(edgeGaussian / edge));
+  // NaN neighbours take no part: a constant sheet with holes stays exactly constant.
+  const auto holed =
+    MakeTexture(40, 30, 0.5, [](unsigned x, unsigned y) { return (x * 7 + y * 3) % 11 == 0 ? NaN : 5.0f; });
+  const auto kept = LST::EdgePreservingSmooth(holed, 1.0, 1.0);
+  for (unsigned y = 0; y < 30; ++y)
+  {
+    for (unsigned x = 0; x < 40; ++x)
+    {
+      if (std::isnan(At(holed, x, y)))
+      {
+        EXPECT_TRUE(std::isnan(At(kept, x, y)));
+      }
+      else
+      {
+        EXPECT_NEAR(At(kept, x, y), 5.0f, 1e-4f);
+      }
+    }
+  }
+  EXPECT_EQ(At(LST::EdgePreservingSmooth(noisy, 0.0, 1.0), 3, 3), At(noisy, 3, 3));
+  EXPECT_THROW(LST::EdgePreservingSmooth(noisy, -1.0, 1.0), itk::ExceptionObject);
+  EXPECT_THROW(LST::EdgePreservingSmooth(noisy, 1.0, 0.0), itk::ExceptionObject);
+  EXPECT_THROW(LST::EdgePreservingSmooth(nullptr, 1.0, 1.0), itk::ExceptionObject);
+}
+
+TEST(LayerStackTexture, DeconvolveUndoesAGaussianBlur)
+{
+  // Bars two pixels wide (0.1 mm pixels), blurred by a Gaussian of sigma 0.1 mm, with NaN
+  // off the sheet (the last columns): deconvolution by the same Gaussian brings them back
+  // much closer to the sharp bars than the blurred image is (squared error under 35%).
+  const auto sharp =
+    MakeTexture(96, 64, 0.1, [](unsigned x, unsigned y) { return (x / 2 + y / 8) % 4 == 0 ? 1.0f : 0.0f; });
+  const auto blurredFull = LST::Smooth(sharp, 0.1);
+  const auto blurred =
+    MakeTexture(96, 64, 0.1, [&](unsigned x, unsigned y) { return x >= 90 ? NaN : At(blurredFull, x, y); });
+  const auto restored = LST::Deconvolve(blurred, 0.1, 0.01);
+  double     errorBlurred = 0.0, errorRestored = 0.0;
+  for (unsigned y = 8; y < 56; ++y)
+  {
+    for (unsigned x = 8; x < 82; ++x)
+    {
+      errorBlurred += std::pow(At(blurred, x, y) - At(sharp, x, y), 2);
+      errorRestored += std::pow(At(restored, x, y) - At(sharp, x, y), 2);
+    }
+  }
+  EXPECT_LT(errorRestored, 0.35 * errorBlurred);
+  for (unsigned y = 0; y < 64; ++y)
+  {
+    EXPECT_TRUE(std::isnan(At(restored, 92, y)));
+    EXPECT_TRUE(std::isfinite(At(restored, 5, y)));
+  }
+  // A stronger regularization sharpens less: closer to the blurred image. Flat regions
+  // keep their value.
+  const auto smooth = LST::Deconvolve(blurred, 0.1, 1.0);
+  double     changeStrong = 0.0, changeWeak = 0.0;
+  for (unsigned y = 8; y < 56; ++y)
+  {
+    for (unsigned x = 8; x < 82; ++x)
+    {
+      changeStrong += std::pow(At(smooth, x, y) - At(blurred, x, y), 2);
+      changeWeak += std::pow(At(restored, x, y) - At(blurred, x, y), 2);
+    }
+  }
+  EXPECT_LT(changeStrong, 0.5 * changeWeak);
+  const auto flat = MakeTexture(32, 32, 0.1, [](unsigned x, unsigned) { return x < 28 ? 7.0f : NaN; });
+  EXPECT_NEAR(At(LST::Deconvolve(flat, 0.1, 0.5), 10, 10), 7.0f, 1e-3f);
+  EXPECT_EQ(At(LST::Deconvolve(blurred, 0.0, 0.1), 3, 3), At(blurred, 3, 3));
+  EXPECT_THROW(LST::Deconvolve(blurred, -0.1, 0.1), itk::ExceptionObject);
+  EXPECT_THROW(LST::Deconvolve(blurred, 0.1, 0.0), itk::ExceptionObject);
+  EXPECT_THROW(LST::Deconvolve(nullptr, 0.1, 0.1), itk::ExceptionObject);
+}
