@@ -3,7 +3,8 @@
 # against the ground truth, from report.json), and bad input fails with one line on
 # stderr, a non-zero exit and no output left behind; the input is never modified.
 # Usage: cmake -DTOOL=<virtual-unwrap> -DWORK=<scratch> -DPRESET=<phantom preset>
-#              -DMAX_CER=<limit> -DMIN_NCC=<limit> -P UnwrapCommandTest.cmake
+#              -DMAX_CER=<limit> -DMIN_NCC=<limit> [-DEXTRA_ARGS=<unwrap options>]
+#              -P UnwrapCommandTest.cmake
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 
@@ -21,7 +22,7 @@ foreach(f ${before})
 endforeach()
 
 execute_process(COMMAND ${TOOL} unwrap ${WORK}/phantom/volume -o ${WORK}/out --ground-truth ${WORK}/phantom
-  RESULT_VARIABLE result OUTPUT_VARIABLE output ERROR_VARIABLE error)
+  ${EXTRA_ARGS} RESULT_VARIABLE result OUTPUT_VARIABLE output ERROR_VARIABLE error)
 if(NOT result EQUAL 0)
   message(FATAL_ERROR "unwrap of ${PRESET} failed: ${error}")
 endif()
@@ -44,6 +45,14 @@ string(JSON p95 GET "${json}" distortion edge_strain p95)
 string(JSON side GET "${json}" parameters texture side)
 string(JSON core GET "${json}" parameters texture subtract_core)
 string(JSON candidates LENGTH "${json}" parameters texture selection candidates)
+# With --restore the PSF it undid is recorded; without, restore is false.
+string(JSON restore GET "${json}" parameters texture restore)
+if(EXTRA_ARGS MATCHES "--restore")
+  string(JSON restored GET "${json}" parameters texture restore psf_fwhm_mm)
+  message(STATUS "${PRESET}: restored, PSF FWHM ${restored} mm")
+elseif(NOT restore STREQUAL "OFF")
+  message(FATAL_ERROR "${PRESET}: restore is '${restore}' without --restore")
+endif()
 message(STATUS "${PRESET}: character error rate ${cer}, texture NCC ${ncc}, edge strain p95 ${p95}, "
   "texture side ${side}, core subtracted ${core}, ${candidates} candidates")
 if(candidates LESS 1)
@@ -81,7 +90,9 @@ vu_expect_failure(unwrap threshold "threshold" ${WORK}/phantom/volume -o ${WORK}
 vu_expect_failure(unwrap nothing "threshold" ${WORK}/phantom/volume -o ${WORK}/bad4 --threshold 100000 -q)
 vu_expect_failure(unwrap smooth "--smooth" ${WORK}/phantom/volume -o ${WORK}/bad5 --smooth lots -q)
 vu_expect_failure(unwrap evenlayers "odd number" ${WORK}/phantom/volume -o ${WORK}/bad6 --layers 4 -q)
-foreach(bad bad1 bad2 bad3 bad4 bad5 bad6)
+vu_expect_failure(unwrap restore "--restore" ${WORK}/phantom/volume -o ${WORK}/bad7 --restore -0.1 -q)
+vu_expect_failure(unwrap restoresmooth "--smooth" ${WORK}/phantom/volume -o ${WORK}/bad8 --restore 0.1 --smooth 0.1 -q)
+foreach(bad bad1 bad2 bad3 bad4 bad5 bad6 bad7 bad8)
   file(GLOB contents ${WORK}/${bad}/*)
   if(contents)
     message(FATAL_ERROR "${bad}: a failed run left ${contents}")

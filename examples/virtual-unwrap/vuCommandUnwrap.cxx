@@ -75,6 +75,7 @@ struct UnwrapOptions
   std::string       SubtractCore{ "auto" };
   std::string       Median{ "auto" };
   std::string       Smooth{ "auto" };
+  std::string       Restore{ "off" };
   std::string       DisplayBorder{ "auto" };
   double            Focus{ 0.0 };
   double            PixelSize{ 0.0 };
@@ -361,6 +362,26 @@ RunUnwrap(UnwrapOptions & options)
   {
     AutoOrLength(value, option, 0.0);
   }
+  if (options.Restore != "off")
+  {
+    bool valid = options.Restore != "auto";
+    try
+    {
+      AutoOrLength(options.Restore, "--restore", 0.0);
+    }
+    catch (const UsageError &)
+    {
+      valid = false;
+    }
+    if (!valid)
+    {
+      throw UsageError("--restore must be off or the scanner's PSF FWHM in mm (>= 0), not '" + options.Restore + "'");
+    }
+    if (options.Smooth != "auto")
+    {
+      throw UsageError("--restore replaces the Gaussian smoothing: leave --smooth at auto");
+    }
+  }
   if (options.Side == "auto" && options.Layers > 0 && options.Layers % 2 == 0)
   {
     throw UsageError("--side auto splits the layers at the focus: give an odd number of --layers");
@@ -471,9 +492,18 @@ RunUnwrap(UnwrapOptions & options)
   {
     throw UsageError("--side auto splits the layers at the focus: give an odd number of --layers");
   }
-  const double medianRadius = AutoOrLength(options.Median, "--median", 0.5 * voxel);
-  const double smoothSigma = AutoOrLength(options.Smooth, "--smooth", 0.5 * voxel);
-  const double displayBorder = AutoOrLength(options.DisplayBorder, "--display-border", meshReport.SheetThickness);
+  // Restoration (--restore FWHM) replaces the Gaussian after the median: edge-preserving
+  // smoothing over one voxel, range twice the texture's background spread, then the
+  // scanner's blur undone: its PSF and the voxels' partial volume.
+  const bool       restore = options.Restore != "off";
+  const double     psfFWHM = restore ? AutoOrLength(options.Restore, "--restore", 0.0) : 0.0;
+  const double     psfSigma = restore ? std::sqrt(std::pow(psfFWHM / 2.3548, 2) + voxel * voxel / 12.0) : 0.0;
+  const double     restoreDomainSigma = restore ? voxel : 0.0;
+  constexpr double RestoreRangeFactor = 2.0;
+  constexpr double RestoreRegularization = 0.1;
+  const double     medianRadius = AutoOrLength(options.Median, "--median", 0.5 * voxel);
+  const double     smoothSigma = restore ? 0.0 : AutoOrLength(options.Smooth, "--smooth", 0.5 * voxel);
+  const double     displayBorder = AutoOrLength(options.DisplayBorder, "--display-border", meshReport.SheetThickness);
   // The sheet's core: the layers within half a voxel of the surface on the chosen side.
   const double coreWidth = 0.5 * voxel;
   auto         surfaceMesh = itk::SheetMeshToMesh<MeshType>(surface);
@@ -494,7 +524,8 @@ RunUnwrap(UnwrapOptions & options)
 
   // Candidate textures from the layer stack: the sides (both halves too with --side auto)
   // with and without the sheet's core subtracted (one side only with --subtract-core
-  // auto), each denoised (median, then Gaussian); the one of highest ink contrast is kept.
+  // auto), each denoised (median, then Gaussian) or restored; the one of highest ink
+  // contrast is kept.
   struct Candidate
   {
     SideEnum             Side;
@@ -523,7 +554,7 @@ RunUnwrap(UnwrapOptions & options)
     }
     for (const bool core : cores)
     {
-      auto combined = itk::LayerStackTexture::Combine(texturer->GetLayerStackOutput(),
+      auto       combined = itk::LayerStackTexture::Combine(texturer->GetLayerStackOutput(),
                                                       layerCount,
                                                       layerSpacing,
                                                       options.Focus,
@@ -532,8 +563,15 @@ RunUnwrap(UnwrapOptions & options)
                                                       FilterFromName(options.Filter),
                                                       texturer->GetGaussianSigma(),
                                                       core ? coreWidth : 0.0);
-      auto smoothed =
-        itk::LayerStackTexture::Smooth(itk::LayerStackTexture::Median(combined, medianRadius), smoothSigma);
+      const auto despeckled = itk::LayerStackTexture::Median(combined, medianRadius);
+      auto       smoothed =
+        restore
+                ? itk::LayerStackTexture::Deconvolve(
+              itk::LayerStackTexture::EdgePreservingSmooth(
+                despeckled, restoreDomainSigma, RestoreRangeFactor * itk::LayerStackTexture::NoiseSpread(despeckled)),
+              psfSigma,
+              RestoreRegularization)
+                : itk::LayerStackTexture::Smooth(despeckled, smoothSigma);
       candidates.push_back({ side, core, itk::LayerStackTexture::InkContrast(smoothed), smoothed });
     }
   }
@@ -637,6 +675,13 @@ RunUnwrap(UnwrapOptions & options)
                                { "core_width_mm", coreWidth },
                                { "median_radius_mm", medianRadius },
                                { "smooth_sigma_mm", smoothSigma },
+                               { "restore",
+                                 restore ? nlohmann::json{ { "psf_fwhm_mm", psfFWHM },
+                                                           { "psf_sigma_mm", psfSigma },
+                                                           { "bilateral_domain_sigma_mm", restoreDomainSigma },
+                                                           { "bilateral_range_factor", RestoreRangeFactor },
+                                                           { "tikhonov_regularization", RestoreRegularization } }
+                                         : nlohmann::json(false) },
                                { "display_border_mm", displayBorder },
                                { "focus_mm", options.Focus },
                                { "pixel_size_mm", pixelSize },
@@ -768,6 +813,15 @@ RegisterUnwrapCommand(CLI::App & app)
     ->add_option("--smooth",
                  options.Smooth,
                  "Gaussian sigma smoothing the texture after the median, mm (0: none), or auto: half the voxel size")
+    ->capture_default_str()
+    ->group(tex);
+  command
+    ->add_option(
+      "--restore",
+      options.Restore,
+      "restore the texture after the median instead of the Gaussian: edge-preserving (bilateral) smoothing "
+      "over one voxel, then deconvolution of the scanner's blur, given as the full width at half maximum of its "
+      "PSF in mm (0: the voxels' partial volume only), or off")
     ->capture_default_str()
     ->group(tex);
   command
