@@ -134,9 +134,25 @@ remove_stale_indexes() {
   done < <(find "$src_dir/Modules" -name itk-module.cmake)
 }
 
+# The modules itk-module.cmake needs that the existing ITK build has not enabled.
+missing_itk_modules() {
+  local m
+  for m in $(itk_modules); do
+    [[ -f "$itk_build/lib/cmake/ITK-5.2/Modules/$m.cmake" ]] || echo "$m"
+  done
+}
+
 configure_itk() {
-  [[ -f "$itk_build/CMakeCache.txt" ]] && return 0
   local args=() m
+  if [[ -f "$itk_build/CMakeCache.txt" ]]; then
+    # A module added to itk-module.cmake since the last build is switched on in place;
+    # the build that follows compiles only what it adds.
+    for m in $(missing_itk_modules); do args+=("-DModule_$m=ON"); done
+    ((${#args[@]} == 0)) && return 0
+    log "enabling ${args[*]} in the existing ITK build"
+    cmake "${args[@]}" "$itk_build" >>"$root/itk-configure.log" 2>&1 || die "ITK reconfigure failed; see $root/itk-configure.log"
+    return 0
+  fi
   for m in $(itk_modules); do args+=("-DModule_$m=ON"); done
   mkdir -p "$itk_build"
   cmake -S "$src_dir" -B "$itk_build" \
@@ -203,6 +219,8 @@ if ((!only_tests)); then
   timed build-itk build_itk
 fi
 [[ -f "$itk_build/.vu-build-complete" ]] || die "no finished ITK build in $itk_build; run without --tests first"
+missing="$(missing_itk_modules | xargs)"
+[[ -z "$missing" ]] || die "the ITK build in $itk_build lacks $missing (new in itk-module.cmake): run scripts/build-python.sh without --tests"
 if [[ ! -x "$tool" ]]; then
   log "building the C++ tool the pipeline test compares with ($tool)"
   source "$here/scripts/setup.sh"
