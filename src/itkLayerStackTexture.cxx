@@ -111,6 +111,32 @@ RestoreNaN(TextureType * result, const std::vector<bool> & wasNaN)
   }
 }
 
+// Throws unless `value` is finite and >= 0 (> 0 when not `zeroAllowed`).
+void
+CheckParameter(double value, bool zeroAllowed, const char * function, const char * what)
+{
+  if (!std::isfinite(value) || value < 0.0 || (!zeroAllowed && value == 0.0))
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::" << function << ": " << what << " must be "
+                             << (zeroAllowed ? ">= 0" : "> 0") << " and finite, got " << value);
+  }
+}
+
+// Runs `filter`, an ITK filter of textures set up but for its input, on `texture` with
+// its NaN pixels holding `fill`; those pixels are NaN again in the result.
+template <typename TFilter>
+TextureType::Pointer
+RunFilled(TFilter * filter, const TextureType * texture, float fill)
+{
+  std::vector<bool> wasNaN;
+  filter->SetInput(FilledCopy(texture, fill, wasNaN));
+  filter->Update();
+  TextureType::Pointer result = filter->GetOutput();
+  result->DisconnectPipeline();
+  RestoreNaN(result, wasNaN);
+  return result;
+}
+
 void
 CheckTexture(const TextureType * texture, const char * function)
 {
@@ -146,11 +172,7 @@ LayerStackTexture::Combine(const LayerStackType * stack,
     itkGenericExceptionMacro(<< "LayerStackTexture::Combine: the stack has " << size[2] << " layers, not "
                              << numberOfLayers << ", or is not fully buffered");
   }
-  if (!(coreWidth >= 0.0) || !std::isfinite(coreWidth))
-  {
-    itkGenericExceptionMacro(<< "LayerStackTexture::Combine: the core width must be >= 0 and finite, got "
-                             << coreWidth);
-  }
+  CheckParameter(coreWidth, true, "Combine", "the core width");
   // The chosen layers: all of them, or one half of a stack sampled on both sides.
   std::vector<SizeValueType> index;
   unsigned int               count = numberOfLayers;
@@ -266,10 +288,7 @@ LayerStackTexture::TextureType::Pointer
 LayerStackTexture::Smooth(const TextureType * texture, double sigma)
 {
   CheckTexture(texture, "Smooth");
-  if (!(sigma >= 0.0) || !std::isfinite(sigma))
-  {
-    itkGenericExceptionMacro(<< "LayerStackTexture::Smooth: sigma must be >= 0 and finite, got " << sigma);
-  }
+  CheckParameter(sigma, true, "Smooth", "sigma");
   auto          result = NewTexture(texture);
   const auto    size = texture->GetBufferedRegion().GetSize();
   const size_t  n = texture->GetBufferedRegion().GetNumberOfPixels();
@@ -334,10 +353,7 @@ LayerStackTexture::TextureType::Pointer
 LayerStackTexture::Median(const TextureType * texture, double radius)
 {
   CheckTexture(texture, "Median");
-  if (!(radius >= 0.0) || !std::isfinite(radius))
-  {
-    itkGenericExceptionMacro(<< "LayerStackTexture::Median: the radius must be >= 0 and finite, got " << radius);
-  }
+  CheckParameter(radius, true, "Median", "the radius");
   auto          result = NewTexture(texture);
   const auto    size = texture->GetBufferedRegion().GetSize();
   const float * in = texture->GetBufferPointer();
@@ -389,16 +405,8 @@ LayerStackTexture::TextureType::Pointer
 LayerStackTexture::EdgePreservingSmooth(const TextureType * texture, double domainSigma, double rangeSigma)
 {
   CheckTexture(texture, "EdgePreservingSmooth");
-  if (!(domainSigma >= 0.0) || !std::isfinite(domainSigma))
-  {
-    itkGenericExceptionMacro(
-      << "LayerStackTexture::EdgePreservingSmooth: the domain sigma must be >= 0 and finite, got " << domainSigma);
-  }
-  if (!(rangeSigma > 0.0) || !std::isfinite(rangeSigma))
-  {
-    itkGenericExceptionMacro(<< "LayerStackTexture::EdgePreservingSmooth: the range sigma must be > 0 and finite, got "
-                             << rangeSigma);
-  }
+  CheckParameter(domainSigma, true, "EdgePreservingSmooth", "the domain sigma");
+  CheckParameter(rangeSigma, false, "EdgePreservingSmooth", "the range sigma");
   std::vector<float> values = FiniteValues(texture);
   if (domainSigma == 0.0 || values.empty())
   {
@@ -407,45 +415,24 @@ LayerStackTexture::EdgePreservingSmooth(const TextureType * texture, double doma
   // ITK's bilateral filter gives no weight to neighbours more than 4 range sigmas away
   // (its fixed RangeMu): NaN pixels are filled with a value 10 range sigmas above every
   // finite one, so they neither contribute nor take anything from their neighbours.
-  using BilateralType = BilateralImageFilter<TextureType, TextureType>;
-  auto              bilateral = BilateralType::New();
-  const double      top = *std::max_element(values.begin(), values.end());
-  const float       far = static_cast<float>(top + 10.0 * rangeSigma + 1.0);
-  std::vector<bool> wasNaN;
-  auto              filled = FilledCopy(texture, far, wasNaN);
-  bilateral->SetInput(filled);
+  auto         bilateral = BilateralImageFilter<TextureType, TextureType>::New();
+  const double top = *std::max_element(values.begin(), values.end());
   bilateral->SetDomainSigma(domainSigma);
   bilateral->SetRangeSigma(rangeSigma);
-  bilateral->Update();
-  TextureType::Pointer result = bilateral->GetOutput();
-  result->DisconnectPipeline();
-  RestoreNaN(result, wasNaN);
-  return result;
+  return RunFilled(bilateral.GetPointer(), texture, static_cast<float>(top + 10.0 * rangeSigma + 1.0));
 }
 
 LayerStackTexture::TextureType::Pointer
 LayerStackTexture::Deconvolve(const TextureType * texture, double psfSigma, double regularization)
 {
   CheckTexture(texture, "Deconvolve");
-  if (!(psfSigma >= 0.0) || !std::isfinite(psfSigma))
-  {
-    itkGenericExceptionMacro(<< "LayerStackTexture::Deconvolve: the PSF sigma must be >= 0 and finite, got "
-                             << psfSigma);
-  }
-  if (!(regularization > 0.0) || !std::isfinite(regularization))
-  {
-    itkGenericExceptionMacro(<< "LayerStackTexture::Deconvolve: the regularization must be > 0 and finite, got "
-                             << regularization);
-  }
+  CheckParameter(psfSigma, true, "Deconvolve", "the PSF sigma");
+  CheckParameter(regularization, false, "Deconvolve", "the regularization");
   std::vector<float> values = FiniteValues(texture);
   if (psfSigma == 0.0 || values.empty())
   {
     return Smooth(texture, 0.0);
   }
-  // The transform needs every pixel: those off the sheet hold the sheet's median, which
-  // adds no edge at the sheet's outline.
-  std::vector<bool> wasNaN;
-  auto              filled = FilledCopy(texture, static_cast<float>(Rank(values, 0.5)), wasNaN);
   // The PSF on the texture's grid, four sigmas each way, unit sum.
   auto                                        psf = GaussianImageSource<TextureType>::New();
   TextureType::SizeType                       size;
@@ -464,19 +451,18 @@ LayerStackTexture::Deconvolve(const TextureType * texture, double psfSigma, doub
   psf->SetScale(1.0);
   psf->SetNormalized(true);
   auto deconvolve = TikhonovDeconvolutionImageFilter<TextureType, TextureType, TextureType>::New();
-  deconvolve->SetInput(filled);
   deconvolve->SetKernelImage(psf->GetOutput());
   deconvolve->SetNormalize(true);
   deconvolve->SetRegularizationConstant(regularization);
-  deconvolve->Update();
-  TextureType::Pointer result = deconvolve->GetOutput();
-  result->DisconnectPipeline();
+  // The transform needs every pixel: those off the sheet hold the sheet's median, which
+  // adds no edge at the sheet's outline.
+  auto result = RunFilled(deconvolve.GetPointer(), texture, static_cast<float>(Rank(values, 0.5)));
   // Tikhonov's filter has gain 1 / (1 + regularization) at zero frequency: undone, so
-  // flat regions keep their value.
+  // flat regions keep their value (NaN stays NaN).
   float * out = result->GetBufferPointer();
-  for (size_t k = 0; k < wasNaN.size(); ++k)
+  for (SizeValueType k = 0; k < result->GetBufferedRegion().GetNumberOfPixels(); ++k)
   {
-    out[k] = wasNaN[k] ? NaN : static_cast<float>(out[k] * (1.0 + regularization));
+    out[k] = static_cast<float>(out[k] * (1.0 + regularization));
   }
   return result;
 }
@@ -485,10 +471,7 @@ LayerStackTexture::TextureType::Pointer
 LayerStackTexture::TrimBorder(const TextureType * texture, double width)
 {
   CheckTexture(texture, "TrimBorder");
-  if (!(width >= 0.0) || !std::isfinite(width))
-  {
-    itkGenericExceptionMacro(<< "LayerStackTexture::TrimBorder: the width must be >= 0 and finite, got " << width);
-  }
+  CheckParameter(width, true, "TrimBorder", "the width");
   auto          result = NewTexture(texture);
   const float * in = texture->GetBufferPointer();
   float *       out = result->GetBufferPointer();
