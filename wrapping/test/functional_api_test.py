@@ -72,6 +72,13 @@ for label, mesh_type in (("Mesh[F,3]", itk.Mesh[itk.F, 3]), ("Mesh[D,3]", itk.Me
     assert np.isfinite(texture[sheet]).all() and np.isnan(texture[~sheet]).all()
     layers = itk.array_view_from_image(texturer.GetLayerStackOutput())
     assert layers.shape[0] == 5
+    # Restoration of the texture (static functions of LayerStackTexture): NaN stays NaN.
+    restored = itk.LayerStackTexture.Deconvolve(
+        itk.LayerStackTexture.EdgePreservingSmooth(
+            texturer.GetOutput(), 0.1, 2.0 * itk.LayerStackTexture.NoiseSpread(texturer.GetOutput())), 0.06, 0.1)
+    restored_array = itk.array_view_from_image(restored)
+    assert np.isfinite(restored_array[sheet]).all() and np.isnan(restored_array[~sheet]).all()
+    assert abs(np.median(restored_array[sheet]) - np.median(texture[sheet])) < 0.2 * np.std(texture[sheet])
     print(f"[ figures ] {label}: "
           f"{surface.GetNumberOfPoints()} points, strain p95 {distortion.GetEdgeStrainP95():.1e}, "
           f"texture {texture.shape[::-1]}, sheet {sheet.mean():.1%}")
