@@ -58,11 +58,12 @@ namespace itk {
  * - Deconvolve(): undoes a Gaussian blur of standard deviation psfSigma (physical units;
  *   0 returns a copy) with ITK's TikhonovDeconvolutionImageFilter and the given
  *   regularization (> 0; relative to the PSF's unit gain: larger is smoother), scaled
- *   by 1 + regularization so that flat regions keep their value. For a scan
- *   with a Gaussian PSF of full width at half maximum F and voxels of size v, sampled
- *   with linear interpolation, the texture is blurred by about
- *   sqrt((F / 2.355)^2 + v^2 / 12) before interpolation. NaN pixels are filled with the
- *   median of the finite ones for the transform and stay NaN.
+ *   by 1 + regularization so that flat regions keep their value. NaN pixels are filled
+ *   with the median of the finite ones for the transform and stay NaN.
+ * - ScanBlurSigma(): the standard deviation of the blur a texture sampled from a scan
+ *   carries, for Deconvolve(): the scanner's Gaussian PSF of full width at half maximum
+ *   psfFWHM combined with the partial volume of voxels of size voxelSize,
+ *   sqrt((psfFWHM / 2.3548)^2 + voxelSize^2 / 12) (both >= 0, physical units).
  * - Smooth(): Gaussian of standard deviation sigma (physical units, 0 returns a copy) by
  *   normalised convolution: NaN pixels neither contribute nor change.
  * - Median(): median of the finite pixels in the square of half-side `radius` (physical
@@ -105,6 +106,9 @@ public:
 
   static TextureType::Pointer
   Deconvolve(const TextureType * texture, double psfSigma, double regularization);
+
+  static double
+  ScanBlurSigma(double psfFWHM, double voxelSize);
 
   static TextureType::Pointer
   Smooth(const TextureType * texture, double sigma);

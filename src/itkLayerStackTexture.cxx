@@ -467,6 +467,15 @@ LayerStackTexture::Deconvolve(const TextureType * texture, double psfSigma, doub
   return result;
 }
 
+double
+LayerStackTexture::ScanBlurSigma(double psfFWHM, double voxelSize)
+{
+  CheckParameter(psfFWHM, true, "ScanBlurSigma", "the PSF FWHM");
+  CheckParameter(voxelSize, true, "ScanBlurSigma", "the voxel size");
+  const double psfSigma = psfFWHM / (2.0 * std::sqrt(2.0 * std::log(2.0)));
+  return std::sqrt(psfSigma * psfSigma + voxelSize * voxelSize / 12.0);
+}
+
 LayerStackTexture::TextureType::Pointer
 LayerStackTexture::TrimBorder(const TextureType * texture, double width)
 {

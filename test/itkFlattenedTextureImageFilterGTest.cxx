@@ -475,9 +475,8 @@ TEST(FlattenedTextureImageFilter, StandardRolledPhantomWithTrueFlattening)
   // partial volume, sigma^2 = (FWHM / 2.355)^2 + voxel^2 / 12.
   const double spread = itk::LayerStackTexture::NoiseSpread(filter->GetOutput());
   const auto   denoised = itk::LayerStackTexture::EdgePreservingSmooth(filter->GetOutput(), voxel, 2.0 * spread);
-  const double psfSigma =
-    std::sqrt(std::pow(source->GetBlurFWHM() / (2.0 * std::sqrt(2.0 * std::log(2.0))), 2) + voxel * voxel / 12.0);
-  const auto restoredTexture = itk::LayerStackTexture::Deconvolve(denoised, psfSigma, 0.1);
+  const double psfSigma = itk::LayerStackTexture::ScanBlurSigma(source->GetBlurFWHM(), voxel);
+  const auto   restoredTexture = itk::LayerStackTexture::Deconvolve(denoised, psfSigma, 0.1);
   std::cout << "[ figures ] denoised (bilateral, range " << 2.0 * spread << "), against the sharp ink, border "
             << border << " mm: ";
   const auto smoothed = measure(sharp, denoised, border);

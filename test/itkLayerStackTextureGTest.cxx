@@ -419,4 +419,8 @@ TEST(LayerStackTexture, DeconvolveUndoesAGaussianBlur)
   EXPECT_THROW(LST::Deconvolve(blurred, -0.1, 0.1), itk::ExceptionObject);
   EXPECT_THROW(LST::Deconvolve(blurred, 0.1, 0.0), itk::ExceptionObject);
   EXPECT_THROW(LST::Deconvolve(nullptr, 0.1, 0.1), itk::ExceptionObject);
+  // The blur of a scan: a PSF of FWHM 0.12 mm (sigma 0.05096) with 0.1 mm voxels.
+  EXPECT_NEAR(LST::ScanBlurSigma(0.12, 0.1), std::sqrt(0.05096 * 0.05096 + 0.01 / 12.0), 1e-5);
+  EXPECT_NEAR(LST::ScanBlurSigma(0.0, 0.3), 0.3 / std::sqrt(12.0), 1e-12);
+  EXPECT_THROW(LST::ScanBlurSigma(-0.1, 0.1), itk::ExceptionObject);
 }

@@ -149,6 +149,26 @@ AutoOrLength(const std::string & value, const std::string & option, double autom
   return length;
 }
 
+// --restore: the scanner's PSF FWHM in mm, or -1 for off.
+double
+RestoreFWHM(const std::string & value)
+{
+  if (value == "off")
+  {
+    return -1.0;
+  }
+  if (value != "auto")
+  {
+    try
+    {
+      return AutoOrLength(value, "--restore", 0.0);
+    }
+    catch (const UsageError &)
+    {}
+  }
+  throw UsageError("--restore must be off or the scanner's PSF FWHM in mm (>= 0), not '" + value + "'");
+}
+
 // Flat y grows upwards when the sheet is seen from the side its normals face; image rows
 // grow downwards. Flipping rows shows the sheet as seen from that side, not mirrored.
 template <typename TImage>
@@ -362,25 +382,9 @@ RunUnwrap(UnwrapOptions & options)
   {
     AutoOrLength(value, option, 0.0);
   }
-  if (options.Restore != "off")
+  if (RestoreFWHM(options.Restore) >= 0.0 && options.Smooth != "auto")
   {
-    bool valid = options.Restore != "auto";
-    try
-    {
-      AutoOrLength(options.Restore, "--restore", 0.0);
-    }
-    catch (const UsageError &)
-    {
-      valid = false;
-    }
-    if (!valid)
-    {
-      throw UsageError("--restore must be off or the scanner's PSF FWHM in mm (>= 0), not '" + options.Restore + "'");
-    }
-    if (options.Smooth != "auto")
-    {
-      throw UsageError("--restore replaces the Gaussian smoothing: leave --smooth at auto");
-    }
+    throw UsageError("--restore replaces the Gaussian smoothing: leave --smooth at auto");
   }
   if (options.Side == "auto" && options.Layers > 0 && options.Layers % 2 == 0)
   {
@@ -495,9 +499,9 @@ RunUnwrap(UnwrapOptions & options)
   // Restoration (--restore FWHM) replaces the Gaussian after the median: edge-preserving
   // smoothing over one voxel, range twice the texture's background spread, then the
   // scanner's blur undone: its PSF and the voxels' partial volume.
-  const bool       restore = options.Restore != "off";
-  const double     psfFWHM = restore ? AutoOrLength(options.Restore, "--restore", 0.0) : 0.0;
-  const double     psfSigma = restore ? std::sqrt(std::pow(psfFWHM / 2.3548, 2) + voxel * voxel / 12.0) : 0.0;
+  const double     psfFWHM = RestoreFWHM(options.Restore);
+  const bool       restore = psfFWHM >= 0.0;
+  const double     psfSigma = restore ? itk::LayerStackTexture::ScanBlurSigma(psfFWHM, voxel) : 0.0;
   const double     restoreDomainSigma = restore ? voxel : 0.0;
   constexpr double RestoreRangeFactor = 2.0;
   constexpr double RestoreRegularization = 0.1;
@@ -521,6 +525,20 @@ RunUnwrap(UnwrapOptions & options)
   texturer->SetLayerFilter(FilterFromName(options.Filter));
   progress.Observe(texturer);
   texturer->Update();
+
+  // Each candidate's denoising: the median, then the Gaussian or the restoration (no
+  // edge-preserving step on a texture without spread, which it would leave as it is).
+  const auto denoise = [&](const TextureType * combined) {
+    const auto despeckled = itk::LayerStackTexture::Median(combined, medianRadius);
+    if (!restore)
+    {
+      return itk::LayerStackTexture::Smooth(despeckled, smoothSigma);
+    }
+    const double range = RestoreRangeFactor * itk::LayerStackTexture::NoiseSpread(despeckled);
+    const auto   smoothed =
+      range > 0.0 ? itk::LayerStackTexture::EdgePreservingSmooth(despeckled, restoreDomainSigma, range) : despeckled;
+    return itk::LayerStackTexture::Deconvolve(smoothed, psfSigma, RestoreRegularization);
+  };
 
   // Candidate textures from the layer stack: the sides (both halves too with --side auto)
   // with and without the sheet's core subtracted (one side only with --subtract-core
@@ -563,15 +581,7 @@ RunUnwrap(UnwrapOptions & options)
                                                       FilterFromName(options.Filter),
                                                       texturer->GetGaussianSigma(),
                                                       core ? coreWidth : 0.0);
-      const auto despeckled = itk::LayerStackTexture::Median(combined, medianRadius);
-      auto       smoothed =
-        restore
-                ? itk::LayerStackTexture::Deconvolve(
-              itk::LayerStackTexture::EdgePreservingSmooth(
-                despeckled, restoreDomainSigma, RestoreRangeFactor * itk::LayerStackTexture::NoiseSpread(despeckled)),
-              psfSigma,
-              RestoreRegularization)
-                : itk::LayerStackTexture::Smooth(despeckled, smoothSigma);
+      const auto smoothed = denoise(combined);
       candidates.push_back({ side, core, itk::LayerStackTexture::InkContrast(smoothed), smoothed });
     }
   }
