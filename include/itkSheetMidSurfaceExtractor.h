@@ -95,9 +95,50 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
   double AxisSlope[2]{ 0.0, 0.0 };
   size_t SlicesWithMaterial{ 0 };
   /** Slices inside the meshed range whose trace failed, interpolated from neighbours. */
-  size_t                   InterpolatedSlices{ 0 };
+  size_t InterpolatedSlices{ 0 };
+  /** Roll method: per slice of the view, the fraction of its traced spiral confirmed by a
+   * crossing of the sheet (the rest carried over from neighbouring slices through touching
+   * or faint stretches); -1 for slices without material, 0 for slices not traced. */
+  std::vector<double> SliceConfidence;
+  /** Roll method: median radial distance between successive turns (mm) and the number of
+   * turns traced in the middle slice. */
+  double TurnSpacing{ 0.0 };
+  double Turns{ 0.0 };
+  /** Roll method: where the traces of neighbouring slices disagree by more than half a turn
+   * spacing (a turn lost or jumped between them): the slice and the turn, counted from the
+   * inner end. */
+  struct LayerJump
+  {
+    size_t Slice;
+    double Turn;
+  };
+  std::vector<LayerJump>   LayerJumps;
   std::vector<std::string> Warnings;
 };
+
+/** Intensity levels of a scan of a sheet: air and sheet material (medians) and the noise
+ * of air (the distance from its median to its 15.9th percentile: one standard deviation for
+ * Gaussian noise, measured on the lower half, which partial-volume voxels at the sheet's
+ * faces do not reach). Values equal to the smallest air value (padding outside a scanner's
+ * field of view) are left out. */
+struct VirtualUnwrapping_EXPORT SheetIntensityLevels
+{
+  double Air{ 0.0 };
+  double Sheet{ 0.0 };
+  double Noise{ 0.0 };
+  /** (Sheet - Air) / Noise; infinite for a noise-free scan. */
+  double
+  SignalToNoise() const;
+  /** Gaussian smoothing (in voxels) that brings the scan's noise well below the sheet's
+   * contrast without merging turns two voxels apart: 0 at a signal-to-noise ratio of 12
+   * and above, else 3 / SNR clamped to [0.5, 1.0]. */
+  double
+  DenoisingSigma() const;
+};
+/** Estimates the levels from samples of air and of material (for example the voxels
+ * outside and inside a mask, or below and above a threshold). */
+VirtualUnwrapping_EXPORT SheetIntensityLevels
+EstimateSheetIntensityLevels(std::vector<float> air, std::vector<float> material);
 
 /** \class SheetMidSurfaceExtractor
  * \brief Builds an open, grid-structured triangle mesh on the mid-surface of one rolled or

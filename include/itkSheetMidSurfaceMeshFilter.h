@@ -157,6 +157,12 @@ private:
   AlignWithRollAxis(typename SheetImageType::Pointer &     sheetMask,
                     typename IntensityImageType::Pointer & sheetIntensity,
                     std::vector<std::string> &             warnings) const;
+  /** Smooths the intensities of a noisy scan for tracing (SheetIntensityLevels::DenoisingSigma
+   * across the sheet, twice that along the roll axis); a clean scan is left as it is. */
+  void
+  Denoise(const SheetImageType *                 sheetMask,
+          typename IntensityImageType::Pointer & sheetIntensity,
+          std::vector<std::string> &             warnings) const;
 
   SheetSurfaceMethodEnum m_Method{ SheetSurfaceMethodEnum::Auto };
   double                 m_SpacingAlongSheet{ 0.0 };

@@ -25,6 +25,7 @@
 #include "itkResampleImageFilter.h"
 #include "itkSheetMeshAdaptor.h"
 #include "itkSheetMidSurfaceMeshFilter.h"
+#include "itkSmoothingRecursiveGaussianImageFilter.h"
 
 #include <numeric>
 #include <sstream>
@@ -154,6 +155,10 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     }
   }
   this->AlignWithRollAxis(sheetMask, sheetIntensity, warnings);
+  if (sheetIntensity)
+  {
+    this->Denoise(sheetMask, sheetIntensity, warnings);
+  }
 
   SheetVolumeView view;
   view.Mask = sheetMask->GetBufferPointer();
@@ -395,6 +400,46 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AlignWithRollAxis(
   {
     text << " to square in-plane voxels of " << inPlane;
   }
+  warnings.push_back(text.str());
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+void
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::Denoise(const SheetImageType *                 sheetMask,
+                                                            typename IntensityImageType::Pointer & sheetIntensity,
+                                                            std::vector<std::string> &             warnings) const
+{
+  const size_t       count = sheetMask->GetBufferedRegion().GetNumberOfPixels();
+  const size_t       stride = std::max<size_t>(1, count / 400000);
+  std::vector<float> air, material;
+  const uint8_t *    mask = sheetMask->GetBufferPointer();
+  const float *      values = sheetIntensity->GetBufferPointer();
+  for (size_t i = 0; i < count; i += stride)
+  {
+    (mask[i] != 0 ? material : air).push_back(values[i]);
+  }
+  const SheetIntensityLevels levels = EstimateSheetIntensityLevels(std::move(air), std::move(material));
+  const double               sigma = levels.DenoisingSigma();
+  if (!(sigma > 0.0))
+  {
+    return;
+  }
+  // The slices now cut across the roll axis, along which the sheet does not change: smooth
+  // twice as much along it as across the sheet.
+  const auto & spacing = sheetIntensity->GetSpacing();
+  typename SmoothingRecursiveGaussianImageFilter<IntensityImageType, IntensityImageType>::SigmaArrayType sigmas;
+  sigmas[0] = sigma * spacing[0];
+  sigmas[1] = sigma * spacing[1];
+  sigmas[2] = 2.0 * sigma * spacing[2];
+  auto smoothing = SmoothingRecursiveGaussianImageFilter<IntensityImageType, IntensityImageType>::New();
+  smoothing->SetInput(sheetIntensity);
+  smoothing->SetSigmaArray(sigmas);
+  smoothing->Update();
+  sheetIntensity = smoothing->GetOutput();
+  std::ostringstream text;
+  text << "noisy scan (sheet contrast " << levels.SignalToNoise()
+       << " times the noise): intensities smoothed for tracing, Gaussian sigma " << sigma << " voxel across and "
+       << 2.0 * sigma << " along the roll axis";
   warnings.push_back(text.str());
 }
 

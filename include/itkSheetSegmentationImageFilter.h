@@ -31,7 +31,11 @@ namespace itk {
  *    the whole volume finds the object's bounding box, padded by two voxels, and Otsu's
  *    threshold over that box alone is used, so that an air-only border of any size does
  *    not pull the threshold (itk::OtsuThresholdImageFilter, NumberOfHistogramBins bins);
- * 2. voxels >= threshold become candidates; face-connected components
+ * 2. a noisy scan is smoothed first (itk::SmoothingRecursiveGaussianImageFilter) by
+ *    DenoisingSigma voxels; automatic by default: SheetIntensityLevels::DenoisingSigma of the
+ *    levels below and above the threshold (none at a signal-to-noise ratio of 12 and above,
+ *    else 0.5-1 voxel), and an automatic threshold then moves halfway between air and sheet;
+ *    voxels >= threshold become candidates; face-connected components
  *    (itk::ConnectedComponentImageFilter) smaller than MinimumComponentSize voxels are
  *    removed as noise (itk::RelabelComponentImageFilter);
  * 3. optional binary closing with a ball of ClosingRadius voxels
@@ -41,7 +45,8 @@ namespace itk {
  * Parameters: AutomaticThreshold (default true); Threshold (input units, e.g. HU, used when
  * AutomaticThreshold is off; after Update() GetThreshold() returns the threshold used);
  * NumberOfHistogramBins (256, >= 2); MinimumComponentSize (voxels, 100, >= 0);
- * ClosingRadius (voxels, 0 = off, >= 0); ForegroundValue (1; background 0).
+ * ClosingRadius (voxels, 0 = off, >= 0); ForegroundValue (1; background 0); DenoisingSigma
+ * (voxels; -1 = automatic, the default; 0 = off); GetAppliedDenoisingSigma() after Update().
  * Outputs: the mask; GetNumberOfComponents() (components kept, largest first) and
  * GetLargestComponentSize() (voxels).
  *
@@ -86,6 +91,9 @@ public:
   itkGetConstMacro(ClosingRadius, unsigned int);
   itkSetMacro(ForegroundValue, MaskPixelType);
   itkGetConstMacro(ForegroundValue, MaskPixelType);
+  itkSetMacro(DenoisingSigma, double);
+  itkGetConstMacro(DenoisingSigma, double);
+  itkGetConstMacro(AppliedDenoisingSigma, double);
 
   itkGetConstMacro(NumberOfComponents, SizeValueType);
   itkGetConstMacro(LargestComponentSize, SizeValueType);
@@ -112,6 +120,8 @@ private:
   SizeValueType m_MinimumComponentSize{ 100 };
   unsigned int  m_ClosingRadius{ 0 };
   MaskPixelType m_ForegroundValue{ 1 };
+  double        m_DenoisingSigma{ -1.0 };
+  double        m_AppliedDenoisingSigma{ 0.0 };
   SizeValueType m_NumberOfComponents{ 0 };
   SizeValueType m_LargestComponentSize{ 0 };
 };

@@ -28,7 +28,9 @@
 #include "itkProgressAccumulator.h"
 #include "itkRegionOfInterestImageFilter.h"
 #include "itkRelabelComponentImageFilter.h"
+#include "itkSheetMidSurfaceExtractor.h"
 #include "itkSheetSegmentationImageFilter.h"
+#include "itkSmoothingRecursiveGaussianImageFilter.h"
 
 namespace itk {
 template <typename TInputImage, typename TMaskImage>
@@ -135,14 +137,64 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
   progress->SetMiniPipelineFilter(this);
 
   using LabelImageType = Image<SizeValueType, ImageDimension>;
-  auto threshold = BinaryThresholdImageFilter<InputImageType, MaskImageType>::New();
-  threshold->SetInput(input);
-  threshold->SetLowerThreshold(
-    static_cast<InputPixelType>(std::max(m_Threshold, static_cast<double>(NumericTraits<InputPixelType>::lowest()))));
-  threshold->SetInsideValue(1);
-  threshold->SetOutsideValue(0);
+  // A noisy scan is smoothed before thresholding, enough to keep noise out of the mask but
+  // not so much that turns two voxels apart merge.
+  m_AppliedDenoisingSigma = m_DenoisingSigma;
+  SheetIntensityLevels levels;
+  if (m_DenoisingSigma < 0.0)
+  {
+    const size_t           count = input->GetBufferedRegion().GetNumberOfPixels();
+    const size_t           stride = std::max<size_t>(1, count / 400000);
+    std::vector<float>     below, above;
+    const InputPixelType * values = input->GetBufferPointer();
+    for (size_t i = 0; i < count; i += stride)
+    {
+      const auto value = static_cast<float>(values[i]);
+      (value >= m_Threshold ? above : below).push_back(value);
+    }
+    levels = EstimateSheetIntensityLevels(std::move(below), std::move(above));
+    m_AppliedDenoisingSigma = levels.DenoisingSigma();
+  }
+  typename MaskImageType::Pointer candidates;
+  if (m_AppliedDenoisingSigma > 0.0)
+  {
+    using RealImageType = Image<float, ImageDimension>;
+    auto smoothing = SmoothingRecursiveGaussianImageFilter<InputImageType, RealImageType>::New();
+    smoothing->SetInput(input);
+    typename SmoothingRecursiveGaussianImageFilter<InputImageType, RealImageType>::SigmaArrayType sigmas;
+    for (unsigned d = 0; d < ImageDimension; ++d)
+    {
+      sigmas[d] = m_AppliedDenoisingSigma * input->GetSpacing()[d];
+    }
+    smoothing->SetSigmaArray(sigmas);
+    if (m_AutomaticThreshold && levels.Sheet > levels.Air)
+    {
+      // Halfway between air and sheet: the smoothed scan has lost the noise that set Otsu's.
+      m_Threshold = 0.5 * (levels.Air + levels.Sheet);
+    }
+    auto threshold = BinaryThresholdImageFilter<RealImageType, MaskImageType>::New();
+    threshold->SetInput(smoothing->GetOutput());
+    threshold->SetLowerThreshold(static_cast<float>(m_Threshold));
+    threshold->SetInsideValue(1);
+    threshold->SetOutsideValue(0);
+    progress->RegisterInternalFilter(smoothing, 0.1f);
+    threshold->Update();
+    candidates = threshold->GetOutput();
+  }
+  else
+  {
+    auto threshold = BinaryThresholdImageFilter<InputImageType, MaskImageType>::New();
+    threshold->SetInput(input);
+    threshold->SetLowerThreshold(
+      static_cast<InputPixelType>(std::max(m_Threshold, static_cast<double>(NumericTraits<InputPixelType>::lowest()))));
+    threshold->SetInsideValue(1);
+    threshold->SetOutsideValue(0);
+    progress->RegisterInternalFilter(threshold, 0.1f);
+    threshold->Update();
+    candidates = threshold->GetOutput();
+  }
   auto components = ConnectedComponentImageFilter<MaskImageType, LabelImageType>::New();
-  components->SetInput(threshold->GetOutput());
+  components->SetInput(candidates);
   components->FullyConnectedOff();
   auto relabel = RelabelComponentImageFilter<LabelImageType, LabelImageType>::New();
   relabel->SetInput(components->GetOutput());
@@ -152,7 +204,6 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
   keep->SetLowerThreshold(1);
   keep->SetInsideValue(m_ForegroundValue);
   keep->SetOutsideValue(0);
-  progress->RegisterInternalFilter(threshold, 0.1f);
   progress->RegisterInternalFilter(components, 0.4f);
   progress->RegisterInternalFilter(relabel, 0.2f);
   progress->RegisterInternalFilter(keep, m_ClosingRadius > 0 ? 0.1f : 0.3f);
@@ -202,6 +253,8 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::PrintSelf(std::ostream & 
   os << indent << "NumberOfHistogramBins: " << m_NumberOfHistogramBins << std::endl;
   os << indent << "MinimumComponentSize: " << m_MinimumComponentSize << std::endl;
   os << indent << "ClosingRadius: " << m_ClosingRadius << std::endl;
+  os << indent << "DenoisingSigma: " << m_DenoisingSigma << std::endl;
+  os << indent << "AppliedDenoisingSigma: " << m_AppliedDenoisingSigma << std::endl;
   os << indent
      << "ForegroundValue: " << static_cast<typename NumericTraits<MaskPixelType>::PrintType>(m_ForegroundValue)
      << std::endl;

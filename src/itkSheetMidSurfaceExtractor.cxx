@@ -17,6 +17,8 @@
  *=========================================================================*/
 #include "itkSheetMidSurfaceExtractor.h"
 
+#include "vuRollTracer.h"
+
 #include "itkBinaryThinningImageFilter.h"
 #include "itkConnectedComponentImageFilter.h"
 #include "itkImage.h"
@@ -57,6 +59,42 @@ SheetSurfaceMethodFromString(const std::string & name)
     }
   }
   itkGenericExceptionMacro(<< "unknown surface method \"" << name << "\" (known: auto, roll, general)");
+}
+
+double
+SheetIntensityLevels::SignalToNoise() const
+{
+  return Noise > 0.0 ? (Sheet - Air) / Noise : std::numeric_limits<double>::infinity();
+}
+
+double
+SheetIntensityLevels::DenoisingSigma() const
+{
+  const double snr = SignalToNoise();
+  return snr >= 12.0 ? 0.0 : std::clamp(3.0 / snr, 0.5, 1.0);
+}
+
+SheetIntensityLevels
+EstimateSheetIntensityLevels(std::vector<float> air, std::vector<float> material)
+{
+  SheetIntensityLevels levels;
+  if (!air.empty())
+  {
+    const float floor = *std::min_element(air.begin(), air.end());
+    air.erase(std::remove(air.begin(), air.end(), floor), air.end());
+  }
+  auto at = [](std::vector<float> & values, double fraction) {
+    const auto i = values.begin() + static_cast<std::ptrdiff_t>(fraction * static_cast<double>(values.size() - 1));
+    std::nth_element(values.begin(), i, values.end());
+    return static_cast<double>(*i);
+  };
+  if (air.size() >= 16 && !material.empty())
+  {
+    levels.Air = at(air, 0.5);
+    levels.Noise = levels.Air - at(air, 0.1587);
+    levels.Sheet = at(material, 0.5);
+  }
+  return levels;
 }
 
 namespace {
@@ -275,6 +313,7 @@ struct TraceContext
   double Voxel{ 1.0 };      // in-plane voxel size
   double Base{ 0.0 };       // intensity halfway between air and material
   double AirLevel{ 0.0 };   // intensity outside the volume
+  double SheetLevel{ 1.0 }; // intensity of the sheet's material
   double Centre[2]{ 0, 0 }; // roll axis in this slice
 };
 
@@ -300,322 +339,6 @@ CentreAlongLine(const SliceSampler & sampler,
     moment += weight * u;
   }
   return sum > 0.0 ? moment / sum : 0.5 * (lo + hi);
-}
-
-// Extends both ends along their tangents while the material lasts, so that the traced
-// curve reaches the sheet's cut edges.
-void
-ExtendEnds(Polyline & line, const SliceSampler & sampler, double voxel, double maximum)
-{
-  for (int end = 0; end < 2; ++end)
-  {
-    const size_t n = PolylineSize(line);
-    if (n < 2)
-    {
-      return;
-    }
-    // Tangent over about one voxel, away from the end.
-    size_t       last = end == 0 ? 0 : n - 1;
-    size_t       inner = last;
-    const double x0 = line[2 * last], y0 = line[2 * last + 1];
-    while (true)
-    {
-      const size_t next = end == 0 ? inner + 1 : inner - 1;
-      inner = next;
-      if (std::hypot(line[2 * inner] - x0, line[2 * inner + 1] - y0) >= voxel || inner == 0 || inner == n - 1)
-      {
-        break;
-      }
-    }
-    double       tx = x0 - line[2 * inner], ty = y0 - line[2 * inner + 1];
-    const double norm = std::hypot(tx, ty);
-    if (norm <= 0.0)
-    {
-      continue;
-    }
-    tx /= norm;
-    ty /= norm;
-    const double step = 0.25 * voxel;
-    double       reach = 0.0;
-    while (reach + step <= maximum && sampler.Mask(x0 + (reach + step) * tx, y0 + (reach + step) * ty) >= 0.5)
-    {
-      reach += step;
-    }
-    if (reach > 0.0)
-    {
-      const double x = x0 + reach * tx, y = y0 + reach * ty;
-      if (end == 0)
-      {
-        line.insert(line.begin(), { x, y });
-      }
-      else
-      {
-        line.insert(line.end(), { x, y });
-      }
-    }
-  }
-}
-
-// Roll tracer for one slice: crossings along rays, spiral following, smoothing.
-struct RollTrace
-{
-  Polyline Line;
-  double   RayThickness{ 0.0 };
-};
-
-RollTrace
-TraceRollSlice(const SliceSampler & sampler, const TraceContext & context)
-{
-  RollTrace    result;
-  const double voxel = context.Voxel;
-  const double cx = context.Centre[0], cy = context.Centre[1];
-  double       rmax = 0.0;
-  for (size_t j = 0; j < sampler.NY(); ++j)
-  {
-    for (size_t i = 0; i < sampler.NX(); ++i)
-    {
-      if (sampler.MaskPointer()[j * sampler.NX() + i] != 0)
-      {
-        rmax = std::max(rmax, std::hypot(static_cast<double>(i) * voxel - cx, static_cast<double>(j) * voxel - cy));
-      }
-    }
-  }
-  if (rmax <= 0.0)
-  {
-    return result;
-  }
-  rmax += 2.0 * voxel;
-  const double dr = 0.25 * voxel;
-  const auto   nr = static_cast<size_t>(std::ceil(rmax / dr)) + 1;
-  const auto   na = static_cast<long>(std::ceil(2.0 * Pi * rmax / (0.5 * voxel)));
-  const double dphi = 2.0 * Pi / static_cast<double>(na);
-  const auto   pad = static_cast<long>(std::lround(voxel / dr));
-
-  struct Run
-  {
-    double Centre, Start, End;
-  };
-  std::vector<std::vector<Run>> runs(static_cast<size_t>(na));
-  std::vector<double>           lengths;
-  std::vector<double>           mask(nr);
-  for (long k = 0; k < na; ++k)
-  {
-    const double direction[2] = { std::cos(k * dphi), std::sin(k * dphi) };
-    for (size_t j = 0; j < nr; ++j)
-    {
-      mask[j] = sampler.Mask(cx + j * dr * direction[0], cy + j * dr * direction[1]);
-    }
-    std::vector<std::pair<long, long>> spans;
-    for (size_t j = 0; j < nr; ++j)
-    {
-      if (mask[j] >= 0.5)
-      {
-        const auto start = static_cast<long>(j);
-        while (j + 1 < nr && mask[j + 1] >= 0.5)
-        {
-          ++j;
-        }
-        spans.emplace_back(start, static_cast<long>(j));
-      }
-    }
-    const double origin[2] = { cx, cy };
-    for (size_t q = 0; q < spans.size(); ++q)
-    {
-      // Widen by a voxel to catch the blurred flanks, but never past halfway to the next run.
-      long lo = spans[q].first - pad, hi = spans[q].second + pad;
-      if (q > 0)
-      {
-        lo = std::max(lo, (spans[q - 1].second + spans[q].first) / 2 + 1);
-      }
-      if (q + 1 < spans.size())
-      {
-        hi = std::min(hi, (spans[q].second + spans[q + 1].first) / 2);
-      }
-      lo = std::max(lo, 0L);
-      const double centre =
-        sampler.HasIntensity()
-          ? CentreAlongLine(sampler, context, origin, direction, lo * dr, hi * dr, dr)
-          : CentreAlongLine(sampler, context, origin, direction, spans[q].first * dr, spans[q].second * dr, dr);
-      const double start = (spans[q].first - 0.5) * dr, end = (spans[q].second + 0.5) * dr;
-      runs[static_cast<size_t>(k)].push_back({ centre, start, end });
-      lengths.push_back(end - start);
-    }
-  }
-  const double thickness = Median(lengths);
-  if (thickness <= 0.0)
-  {
-    return result;
-  }
-  result.RayThickness = thickness;
-
-  // Touching turns make one long run: split it evenly into sheet-thick crossings.
-  std::vector<std::vector<double>> crossings(static_cast<size_t>(na));
-  std::vector<double>              spacings;
-  for (long k = 0; k < na; ++k)
-  {
-    auto & list = crossings[static_cast<size_t>(k)];
-    for (const Run & run : runs[static_cast<size_t>(k)])
-    {
-      const double length = run.End - run.Start;
-      if (length > 1.6 * thickness)
-      {
-        const long parts = std::max(2L, std::lround(length / thickness));
-        for (long p = 0; p < parts; ++p)
-        {
-          list.push_back(run.Start + (p + 0.5) * length / static_cast<double>(parts));
-        }
-      }
-      else
-      {
-        list.push_back(run.Centre);
-      }
-    }
-    for (size_t q = 1; q < list.size(); ++q)
-    {
-      spacings.push_back(list[q] - list[q - 1]);
-    }
-  }
-  const double pitch = spacings.empty() ? rmax : Median(spacings);
-
-  // Start on the crossing nearest the axis: it lies on the innermost turn.
-  long   startAngle = -1;
-  double startRadius = rmax;
-  for (long k = 0; k < na; ++k)
-  {
-    const auto & list = crossings[static_cast<size_t>(k)];
-    if (!list.empty() && list.front() < startRadius)
-    {
-      startRadius = list.front();
-      startAngle = k;
-    }
-  }
-  if (startAngle < 0)
-  {
-    return result;
-  }
-
-  // Follows the spiral one angular step at a time in direction dir (+1: counter-clockwise).
-  // The predicted radius continues a line fitted to the last accepted steps; the nearest
-  // crossing is taken only if it is much closer than the local turn spacing.
-  // Radius change per step of a squashed roll stays far below this.
-  const double maximumSlope = 0.05 * pitch;
-  auto         follow = [&](int dir) {
-    std::vector<std::pair<long, double>> accepted{ { 0, startRadius } };
-    double                               slope = 0.0;
-    double                               missedArc = 0.0;
-    // A spiral makes about rmax / pitch turns; a trace circling inside material does not end.
-    const long maximumSteps = na * (static_cast<long>(std::ceil(rmax / pitch)) + 2);
-    for (long step = 1; step < maximumSteps; ++step)
-    {
-      const auto   k = static_cast<size_t>(((startAngle + dir * step) % na + na) % na);
-      const auto & last = accepted.back();
-      const double predicted = last.second + slope * static_cast<double>(step - last.first);
-      if (predicted <= 0.0 || predicted > rmax)
-      {
-        break;
-      }
-      const auto & list = crossings[k];
-      size_t       best = list.size();
-      double       bestDistance = rmax;
-      for (size_t q = 0; q < list.size(); ++q)
-      {
-        if (std::abs(list[q] - predicted) < bestDistance)
-        {
-          bestDistance = std::abs(list[q] - predicted);
-          best = q;
-        }
-      }
-      double localSpacing = pitch;
-      if (best < list.size())
-      {
-        if (best > 0)
-        {
-          localSpacing = std::min(localSpacing, list[best] - list[best - 1]);
-        }
-        if (best + 1 < list.size())
-        {
-          localSpacing = std::min(localSpacing, list[best + 1] - list[best]);
-        }
-      }
-      // Both the prediction and the last accepted radius must agree: a prediction that
-      // drifts over the sheet's cut end must not carry the trace onto the next turn.
-      if (best < list.size() && bestDistance < 0.4 * localSpacing &&
-          std::abs(list[best] - last.second) < 0.4 * localSpacing)
-      {
-        accepted.emplace_back(step, list[best]);
-        missedArc = 0.0;
-        // Least-squares slope over the last dozen accepted steps.
-        const size_t count = std::min<size_t>(12, accepted.size());
-        if (count >= 3)
-        {
-          double sx = 0, sy = 0, sxx = 0, sxy = 0;
-          for (size_t q = accepted.size() - count; q < accepted.size(); ++q)
-          {
-            const auto x = static_cast<double>(accepted[q].first);
-            sx += x;
-            sy += accepted[q].second;
-            sxx += x * x;
-            sxy += x * accepted[q].second;
-          }
-          const double denominator = count * sxx - sx * sx;
-          if (denominator > 0.0)
-          {
-            slope = std::clamp((count * sxy - sx * sy) / denominator, -maximumSlope, maximumSlope);
-          }
-        }
-      }
-      else
-      {
-        missedArc += predicted * dphi;
-        if (missedArc > 2.0 * voxel)
-        {
-          break;
-        }
-      }
-    }
-    return accepted;
-  };
-  const auto inward = follow(-1);
-  const auto outward = follow(+1);
-  if (inward.size() + outward.size() < 4)
-  {
-    return result;
-  }
-  // The inward trace ends at the inner end: the curve starts there.
-  std::vector<double> angles, radii;
-  for (auto it = inward.rbegin(); it != inward.rend(); ++it)
-  {
-    angles.push_back((startAngle - it->first) * dphi);
-    radii.push_back(it->second);
-  }
-  for (size_t q = 1; q < outward.size(); ++q)
-  {
-    angles.push_back((startAngle + outward[q].first) * dphi);
-    radii.push_back(outward[q].second);
-  }
-  // Smooth the radius along the trace: the noise of single crossings would otherwise make
-  // the curve longer than the sheet.
-  const int           halfWidth = 4;
-  const auto          n = static_cast<int>(radii.size());
-  std::vector<double> smooth(radii.size());
-  for (int i = 0; i < n; ++i)
-  {
-    const int h = std::min({ halfWidth, i, n - 1 - i });
-    double    sum = 0.0;
-    for (int j = i - h; j <= i + h; ++j)
-    {
-      sum += radii[j];
-    }
-    smooth[i] = sum / (2 * h + 1);
-  }
-  result.Line.resize(2 * radii.size());
-  for (size_t q = 0; q < radii.size(); ++q)
-  {
-    result.Line[2 * q] = cx + smooth[q] * std::cos(angles[q]);
-    result.Line[2 * q + 1] = cy + smooth[q] * std::sin(angles[q]);
-  }
-  ExtendEnds(result.Line, sampler, voxel, 2.0 * thickness + 2.0 * voxel);
-  return result;
 }
 
 // General tracer for one slice: longest path of the skeleton of the largest component.
@@ -739,7 +462,11 @@ TraceGeneralSlice(const SliceSampler & sampler, const TraceContext & context, do
     refined[2 * i + 1] += shift * normal[1];
   }
   refined = Smooth(refined, 2);
-  ExtendEnds(refined, sampler, context.Voxel, 2.0 * thickness + 2.0 * context.Voxel);
+  RollTracing::ExtendEnds(
+    refined,
+    [&](double x, double y) { return sampler.Mask(x, y) >= 0.5; },
+    context.Voxel,
+    2.0 * thickness + 2.0 * context.Voxel);
   return refined;
 }
 
@@ -863,85 +590,91 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
       (volume.Mask[i] != 0 ? inside : outside).push_back(volume.Intensity[i]);
     }
     context.AirLevel = Median(outside);
-    context.Base = 0.5 * (context.AirLevel + Median(inside));
+    context.SheetLevel = Median(inside);
+    context.Base = 0.5 * (context.AirLevel + context.SheetLevel);
   }
 
   std::vector<Polyline> traces(nz);
-  std::vector<double>   rayThickness(nz, 0.0);
-  auto                  traceAll = [&](bool roll, double progressStart, double progressEnd) {
-    std::fill(traces.begin(), traces.end(), Polyline{});
-    const size_t batch = 16;
-    for (size_t first = 0; first < nz; first += batch)
-    {
-      const size_t last = std::min(nz, first + batch);
-      auto         traceOne = [&](SizeValueType k) {
-        if (area[k] <= 0.0)
-        {
-          return;
-        }
-        const SliceSampler sampler(volume, k);
-        TraceContext       local = context;
-        if (roll)
-        {
-          local.Centre[0] = m_Report.AxisCentre[0] + m_Report.AxisSlope[0] * static_cast<double>(k) * sz;
-          local.Centre[1] = m_Report.AxisCentre[1] + m_Report.AxisSlope[1] * static_cast<double>(k) * sz;
-          RollTrace trace = TraceRollSlice(sampler, local);
-          traces[k] = std::move(trace.Line);
-          rayThickness[k] = trace.RayThickness;
-        }
-        else
-        {
-          traces[k] = TraceGeneralSlice(sampler, local, sy);
-        }
-      };
-      if (roll)
-      {
-        MultiThreaderBase::New()->ParallelizeArray(first, last, traceOne, nullptr);
-      }
-      else
-      {
-        // ITK's 2D filters inside run single-threaded; nesting them in the pool could stall it.
-        for (size_t k = first; k < last; ++k)
-        {
-          traceOne(k);
-        }
-      }
-      report(progressStart + (progressEnd - progressStart) * static_cast<double>(last) / static_cast<double>(nz));
-    }
-  };
-
-  // A slice is traced well when its curve, as thick as the sheet across the rays, explains
-  // the slice's material, neither less nor (a trace circling inside material) more.
-  auto rollExplainsMask = [&]() {
-    size_t good = 0;
+  auto                  traceGeneral = [&](double progressStart, double progressEnd) {
+    // ITK's 2D filters inside run single-threaded; nesting them in the pool could stall it.
     for (size_t k = 0; k < nz; ++k)
     {
-      const double explained = traces[k].empty() ? 0.0 : ArcLength(traces[k]) * rayThickness[k];
-      if (area[k] > 0.0 && explained >= 0.8 * area[k] && explained <= 1.25 * area[k])
+      if (area[k] > 0.0)
       {
-        ++good;
+        traces[k] = TraceGeneralSlice(SliceSampler(volume, k), context, sy);
       }
+      report(progressStart + (progressEnd - progressStart) * static_cast<double>(k + 1) / static_cast<double>(nz));
     }
-    return static_cast<double>(good) >= 0.8 * static_cast<double>(m_Report.SlicesWithMaterial);
   };
 
   SheetSurfaceMethodEnum method = parameters.Method;
   if (method != SheetSurfaceMethodEnum::General)
   {
-    traceAll(true, 0.0, method == SheetSurfaceMethodEnum::Auto ? 0.4 : 0.8);
+    // The roll tracer reads intensities; a mask alone serves as a 0/1 intensity.
+    std::vector<float>    maskValues;
+    RollTracing::Settings settings;
+    settings.Voxel = voxel;
+    settings.SliceSpacing = sz;
+    settings.AirLevel = context.AirLevel;
+    settings.SheetLevel = context.SheetLevel;
+    if (volume.Intensity == nullptr)
+    {
+      maskValues.resize(nx * ny * nz);
+      std::transform(
+        volume.Mask, volume.Mask + nx * ny * nz, maskValues.begin(), [](uint8_t v) { return v != 0 ? 1.0f : 0.0f; });
+      settings.AirLevel = 0.0;
+      settings.SheetLevel = 1.0;
+    }
+    for (int d = 0; d < 2; ++d)
+    {
+      settings.AxisCentre[d] = m_Report.AxisCentre[d];
+      settings.AxisSlope[d] = m_Report.AxisSlope[d];
+    }
+    const double rollShare = method == SheetSurfaceMethodEnum::Auto ? 0.4 : 0.8;
+    const auto   roll = RollTracing::TraceRoll(volume,
+                                             volume.Intensity != nullptr ? volume.Intensity : maskValues.data(),
+                                             settings,
+                                             [&](double fraction) { report(rollShare * fraction); });
     if (method == SheetSurfaceMethodEnum::Auto)
     {
-      method = rollExplainsMask() ? SheetSurfaceMethodEnum::Roll : SheetSurfaceMethodEnum::General;
+      method = roll.Rolled ? SheetSurfaceMethodEnum::Roll : SheetSurfaceMethodEnum::General;
     }
-    else if (!rollExplainsMask())
+    else if (!roll.Rolled)
     {
-      m_Report.Warnings.emplace_back("the roll tracer explains the material of fewer than 80 % of the slices: the "
-                                     "sheet may not be rolled (try the general method)");
+      m_Report.Warnings.emplace_back("the roll tracer does not find a spiral of at least one turn through most of "
+                                     "the sheet's crossings: the sheet may not be rolled (try the general method)");
+    }
+    if (method == SheetSurfaceMethodEnum::Roll)
+    {
+      m_Report.SliceConfidence.assign(nz, -1.0);
+      for (size_t k = 0; k < nz; ++k)
+      {
+        traces[k] = roll.Slices[k].Line;
+        if (area[k] > 0.0)
+        {
+          m_Report.SliceConfidence[k] = traces[k].empty() ? 0.0 : roll.Slices[k].Confirmed;
+        }
+      }
+      m_Report.TurnSpacing = roll.Pitch;
+      m_Report.Turns = roll.Slices[nz / 2].Turns;
+      for (const auto & [slice, turn] : roll.Disagreements)
+      {
+        m_Report.LayerJumps.push_back({ slice, turn });
+      }
+      if (!m_Report.LayerJumps.empty())
+      {
+        std::ostringstream text;
+        text << "the traces of " << m_Report.LayerJumps.size()
+             << " slice(s) disagree with their neighbour's by more than half a turn (possible layer jumps), first at "
+                "slice "
+             << m_Report.LayerJumps.front().Slice << ", turn " << m_Report.LayerJumps.front().Turn;
+        m_Report.Warnings.push_back(text.str());
+      }
     }
   }
   if (method == SheetSurfaceMethodEnum::General)
   {
-    traceAll(false, parameters.Method == SheetSurfaceMethodEnum::Auto ? 0.4 : 0.0, 0.8);
+    traceGeneral(parameters.Method == SheetSurfaceMethodEnum::Auto ? 0.4 : 0.0, 0.8);
   }
   m_Report.Method = method;
 
@@ -964,15 +697,32 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
     itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: the traced sheet is only " << referenceLength
                              << " mm long, less than two voxels");
   }
-  // Slices whose traced length is close to the median; the others (cut short, or with a
-  // wrong turn) are interpolated from their neighbours.
+  // Slices whose traced length is close to the median (for a roll: the median of the
+  // slices within five of it, since a roll's radius may change along its axis); the others
+  // (cut short, or with a wrong turn) are interpolated from their neighbours.
+  std::vector<double> expectedLength(nz, referenceLength);
+  if (method == SheetSurfaceMethodEnum::Roll)
+  {
+    for (size_t k = 0; k < nz; ++k)
+    {
+      std::vector<double> around;
+      for (size_t j = k > 5 ? k - 5 : 0; j <= std::min(nz - 1, k + 5); ++j)
+      {
+        if (lengths[j] > 0.0)
+        {
+          around.push_back(lengths[j]);
+        }
+      }
+      expectedLength[k] = around.empty() ? referenceLength : Median(around);
+    }
+  }
   std::vector<char> good(nz, 0);
   long              firstGood = -1, lastGood = -1;
   auto              selectGood = [&](double tolerance) {
     firstGood = lastGood = -1;
     for (size_t k = 0; k < nz; ++k)
     {
-      good[k] = lengths[k] > 0.0 && std::abs(lengths[k] - referenceLength) <= tolerance;
+      good[k] = lengths[k] > 0.0 && std::abs(lengths[k] - expectedLength[k]) <= tolerance;
       if (good[k])
       {
         firstGood = firstGood < 0 ? static_cast<long>(k) : firstGood;
@@ -1074,7 +824,11 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
 
   // A slice shorter or longer than the median by a sizeable part of a column would shear
   // the grid: the columns sit at the same fraction of every slice's length.
-  selectGood(std::min(0.05 * referenceLength, std::max(0.25 * hs, 2.0 * voxel)) + voxel);
+  // (The roll tracer has already matched each slice's ends to its neighbours'.)
+  if (method == SheetSurfaceMethodEnum::General)
+  {
+    selectGood(std::min(0.05 * referenceLength, std::max(0.25 * hs, 2.0 * voxel)) + voxel);
+  }
 
   const auto columns = static_cast<size_t>(std::max(2.0, std::ceil(referenceLength / hs) + 1.0));
   if (columns * (static_cast<size_t>((lastGood - firstGood) * sz / hw) + 2) > (size_t{ 1 } << 31))

@@ -148,6 +148,7 @@ RunSegment(const SegmentOptions & options)
   json["sheet_length_mm"] = report.SheetLength;
   json["minimum_curvature_radius_mm"] = report.MinimumCurvatureRadius;
   json["interpolated_slices"] = report.InterpolatedSlices;
+  json["trace"] = TraceJson(report);
   json["warnings"] = report.Warnings;
   json["conventions"] = "rows along the roll axis (w, slice order), columns along the sheet (s) from its inner end; "
                         "point (row r, column c) at index r * columns + c; roll: normals towards the roll axis, "
@@ -163,6 +164,56 @@ RunSegment(const SegmentOptions & options)
   }
 }
 } // namespace
+
+nlohmann::json
+TraceJson(const itk::SheetMidSurfaceReport & report)
+{
+  // Confidence below which a run of slices is named.
+  constexpr double lowConfidence = 0.8;
+  nlohmann::json   regions = nlohmann::json::array(), jumps = nlohmann::json::array();
+  double           sum = 0.0;
+  size_t           count = 0;
+  const auto &     confidence = report.SliceConfidence;
+  for (size_t k = 0; k < confidence.size(); ++k)
+  {
+    if (confidence[k] < 0.0)
+    {
+      continue;
+    }
+    sum += confidence[k];
+    ++count;
+    if (confidence[k] >= lowConfidence)
+    {
+      continue;
+    }
+    size_t last = k;
+    double lowest = confidence[k];
+    while (last + 1 < confidence.size() && confidence[last + 1] >= 0.0 && confidence[last + 1] < lowConfidence)
+    {
+      lowest = std::min(lowest, confidence[++last]);
+      sum += confidence[last];
+      ++count;
+    }
+    regions.push_back({ { "first_slice", k }, { "last_slice", last }, { "lowest_confidence", lowest } });
+    k = last;
+  }
+  for (const auto & jump : report.LayerJumps)
+  {
+    jumps.push_back({ { "slice", jump.Slice }, { "turn", jump.Turn } });
+  }
+  nlohmann::json json = { { "method", itk::ToString(report.Method) },
+                          { "interpolated_slices", report.InterpolatedSlices },
+                          { "low_confidence_regions", regions },
+                          { "layer_jumps", jumps },
+                          { "slices", "indices of the slices across the roll axis (after any resampling along it)" } };
+  if (report.Method == itk::SheetSurfaceMethodEnum::Roll)
+  {
+    json["turns"] = report.Turns;
+    json["turn_spacing_mm"] = report.TurnSpacing;
+    json["mean_confidence"] = count > 0 ? sum / static_cast<double>(count) : 0.0;
+  }
+  return json;
+}
 
 void
 RegisterSegmentCommand(CLI::App & app)

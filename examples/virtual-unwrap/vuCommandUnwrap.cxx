@@ -706,7 +706,8 @@ RunUnwrap(UnwrapOptions & options)
                      { "grid", { surface.GridRows, surface.GridColumns } },
                      { "sheet_thickness_mm", meshReport.SheetThickness },
                      { "sheet_length_mm", meshReport.SheetLength },
-                     { "minimum_curvature_radius_mm", meshReport.MinimumCurvatureRadius } };
+                     { "minimum_curvature_radius_mm", meshReport.MinimumCurvatureRadius },
+                     { "trace", TraceJson(meshReport) } };
   report["simulation"] = ToJson(flattener.GetReport());
   report["distortion"] = DistortionJson(surface, flat);
   report["texture"] = {

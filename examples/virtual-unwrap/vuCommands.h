@@ -18,6 +18,8 @@
 #ifndef vuCommands_h
 #define vuCommands_h
 
+#include "itkSheetMidSurfaceExtractor.h"
+
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
@@ -51,6 +53,12 @@ RegisterUnwrapCommand(CLI::App & app);
  * failure never leaves a half-written file. */
 void
 WriteTextFileAtomically(const std::string & path, const std::string & text);
+
+/** How well the sheet was traced, for segment.json and report.json: method, turns, turn
+ * spacing, interpolated slices, mean confidence, the runs of slices traced with low
+ * confidence and the possible layer jumps. */
+nlohmann::json
+TraceJson(const itk::SheetMidSurfaceReport & report);
 
 /** Pretty JSON to standard output or, when path is not empty, to a file (atomically). */
 void

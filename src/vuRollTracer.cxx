@@ -1,0 +1,1002 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "vuRollTracer.h"
+
+#include "itkMultiThreaderBase.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace itk {
+namespace RollTracing {
+namespace {
+constexpr double Pi = 3.14159265358979323846;
+
+// A crossing must rise above air by this fraction of the sheet's contrast, and stand out
+// of the dips on both sides by PeakProminence, to count as a sheet (not noise).
+constexpr double PeakLevel = 0.3;
+constexpr double PeakProminence = 0.1;
+// Intensity, as a fraction of the contrast, above which a point is taken to hold material.
+constexpr double MaterialLevel = 0.5;
+// The next crossing is accepted within this fraction of the local turn spacing.
+constexpr double AcceptWindow = 0.4;
+// Slices averaged on each side of the seed slice.
+constexpr long SeedHalfWidth = 3;
+
+double
+Median(std::vector<double> values)
+{
+  if (values.empty())
+  {
+    return 0.0;
+  }
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+// Bilinear samples of one slice of the intensities (mm of the view's frame).
+class ValueSlice
+{
+public:
+  ValueSlice(const SheetVolumeView & volume, const float * values, size_t slice)
+    : m_Values(values + slice * volume.Size[0] * volume.Size[1])
+    , m_NX(static_cast<long>(volume.Size[0]))
+    , m_NY(static_cast<long>(volume.Size[1]))
+    , m_SX(volume.Spacing[0])
+    , m_SY(volume.Spacing[1])
+  {}
+
+  bool
+  Inside(double x, double y) const
+  {
+    const double u = x / m_SX, v = y / m_SY;
+    return u >= 0.0 && v >= 0.0 && u <= static_cast<double>(m_NX - 1) && v <= static_cast<double>(m_NY - 1);
+  }
+
+  double
+  Value(double x, double y, double outside) const
+  {
+    const double u = x / m_SX, v = y / m_SY;
+    const double fu = std::floor(u), fv = std::floor(v);
+    const auto   i0 = static_cast<long>(fu), j0 = static_cast<long>(fv);
+    if (i0 < 0 || j0 < 0 || i0 + 1 >= m_NX || j0 + 1 >= m_NY)
+    {
+      return outside;
+    }
+    const double  a = u - fu, b = v - fv;
+    const float * p = m_Values + j0 * m_NX + i0;
+    return (1.0 - b) * ((1.0 - a) * p[0] + a * p[1]) + b * ((1.0 - a) * p[m_NX] + a * p[m_NX + 1]);
+  }
+
+private:
+  const float * m_Values;
+  long          m_NX, m_NY;
+  double        m_SX, m_SY;
+};
+
+struct Crossing
+{
+  double Radius;
+  double Width;
+};
+
+// The polar frame shared by all slices: ray a at angle a * Step, samples j * Dr from the
+// slice's centre. One angular index m = a + turn * Rays runs along the spiral.
+struct PolarFrame
+{
+  long   Rays{ 0 };
+  double Step{ 0.0 };
+  double Dr{ 0.0 };
+  size_t Samples{ 0 };
+  double RMax{ 0.0 };
+};
+
+// Crossings of the sheet with every ray of a slice: peaks of the (averaged) profile.
+struct SliceCrossings
+{
+  std::vector<std::vector<Crossing>> Rays;
+};
+
+class Tracer
+{
+public:
+  Tracer(const SheetVolumeView & volume, const float * values, const Settings & settings)
+    : m_Volume(volume)
+    , m_Values(values)
+    , m_Settings(settings)
+    , m_Contrast(settings.SheetLevel - settings.AirLevel)
+  {}
+
+  void
+  Centre(size_t slice, double c[2]) const
+  {
+    const double z = static_cast<double>(slice) * m_Settings.SliceSpacing;
+    c[0] = m_Settings.AxisCentre[0] + m_Settings.AxisSlope[0] * z + m_Offset[0];
+    c[1] = m_Settings.AxisCentre[1] + m_Settings.AxisSlope[1] * z + m_Offset[1];
+  }
+
+  void
+  SetOffset(double x, double y)
+  {
+    m_Offset[0] = x;
+    m_Offset[1] = y;
+  }
+  const double *
+  GetOffset() const
+  {
+    return m_Offset;
+  }
+
+  // The polar frame: rays half a voxel apart at the outermost material of any slice.
+  void
+  BuildFrame(const std::vector<size_t> & slices)
+  {
+    const size_t        nx = m_Volume.Size[0], ny = m_Volume.Size[1];
+    std::vector<double> reach(slices.size(), 0.0);
+    MultiThreaderBase::New()->ParallelizeArray(
+      0,
+      slices.size(),
+      [&](SizeValueType q) {
+        const size_t    k = slices[q];
+        const uint8_t * mask = m_Volume.Mask + k * nx * ny;
+        double          c[2];
+        Centre(k, c);
+        double r2 = 0.0;
+        for (size_t j = 0; j < ny; ++j)
+        {
+          for (size_t i = 0; i < nx; ++i)
+          {
+            if (mask[j * nx + i] != 0)
+            {
+              const double dx = static_cast<double>(i) * m_Volume.Spacing[0] - c[0];
+              const double dy = static_cast<double>(j) * m_Volume.Spacing[1] - c[1];
+              r2 = std::max(r2, dx * dx + dy * dy);
+            }
+          }
+        }
+        reach[q] = std::sqrt(r2);
+      },
+      nullptr);
+    const double voxel = m_Settings.Voxel;
+    m_Frame.RMax = *std::max_element(reach.begin(), reach.end()) + 2.0 * voxel;
+    m_Frame.Dr = 0.25 * voxel;
+    m_Frame.Samples = static_cast<size_t>(std::ceil(m_Frame.RMax / m_Frame.Dr)) + 1;
+    m_Frame.Rays = std::max(16L, static_cast<long>(std::ceil(2.0 * Pi * m_Frame.RMax / (0.5 * voxel))));
+    m_Frame.Step = 2.0 * Pi / static_cast<double>(m_Frame.Rays);
+  }
+
+  const PolarFrame &
+  Frame() const
+  {
+    return m_Frame;
+  }
+
+  // Peaks of the mean profile of `slices` along every ray about the centre of `centreSlice`.
+  SliceCrossings
+  FindCrossings(size_t centreSlice, const std::vector<size_t> & slices) const
+  {
+    SliceCrossings result;
+    result.Rays.resize(static_cast<size_t>(m_Frame.Rays));
+    std::vector<ValueSlice> samplers;
+    for (size_t k : slices)
+    {
+      samplers.emplace_back(m_Volume, m_Values, k);
+    }
+    double c[2];
+    Centre(centreSlice, c);
+    const double        air = m_Settings.AirLevel;
+    std::vector<double> profile(m_Frame.Samples);
+    for (long a = 0; a < m_Frame.Rays; ++a)
+    {
+      const double direction[2] = { std::cos(a * m_Frame.Step), std::sin(a * m_Frame.Step) };
+      for (size_t j = 0; j < m_Frame.Samples; ++j)
+      {
+        const double r = static_cast<double>(j) * m_Frame.Dr;
+        double       sum = 0.0;
+        for (const ValueSlice & sampler : samplers)
+        {
+          sum += sampler.Value(c[0] + r * direction[0], c[1] + r * direction[1], air);
+        }
+        profile[j] = sum / static_cast<double>(samplers.size());
+      }
+      result.Rays[static_cast<size_t>(a)] = Peaks(profile);
+    }
+    return result;
+  }
+
+  // Local maxima of a profile that rise above air by PeakLevel of the contrast and stand out
+  // of their dips by PeakProminence; each placed at the centroid of its upper half.
+  std::vector<Crossing>
+  Peaks(const std::vector<double> & p) const
+  {
+    const double      level = m_Settings.AirLevel + PeakLevel * m_Contrast;
+    const double      prominence = PeakProminence * m_Contrast;
+    const long        n = static_cast<long>(p.size());
+    std::vector<long> peaks;
+    // Within a voxel of the centre every ray sees the same material: no crossing there.
+    const auto centre = static_cast<long>(std::ceil(m_Settings.Voxel / m_Frame.Dr));
+    for (long j = std::max(1L, centre); j + 1 < n; ++j)
+    {
+      if (p[j] >= level && p[j] >= p[j - 1] && p[j] > p[j + 1])
+      {
+        peaks.push_back(j);
+      }
+    }
+    // Merge peaks closer than 1.2 voxels or not separated by a dip: keep the higher.
+    const long minimumSeparation = static_cast<long>(std::ceil(1.2 * m_Settings.Voxel / m_Frame.Dr));
+    bool       changed = true;
+    while (changed && peaks.size() > 1)
+    {
+      changed = false;
+      for (size_t q = 0; q + 1 < peaks.size(); ++q)
+      {
+        const long   a = peaks[q], b = peaks[q + 1];
+        const double dip = *std::min_element(p.begin() + a, p.begin() + b + 1);
+        if (b - a < minimumSeparation || std::min(p[a], p[b]) - dip < prominence)
+        {
+          peaks.erase(peaks.begin() + static_cast<std::ptrdiff_t>(p[a] >= p[b] ? q + 1 : q));
+          changed = true;
+          break;
+        }
+      }
+    }
+    std::vector<Crossing> crossings;
+    for (size_t q = 0; q < peaks.size(); ++q)
+    {
+      const long   lo = q > 0 ? peaks[q - 1] : 0, hi = q + 1 < peaks.size() ? peaks[q + 1] : n - 1;
+      const long   j = peaks[q];
+      const double left = *std::min_element(p.begin() + lo, p.begin() + j + 1);
+      const double right = *std::min_element(p.begin() + j, p.begin() + hi + 1);
+      const double half = 0.5 * (p[j] + std::max({ left, right, m_Settings.AirLevel }));
+      long         first = j, last = j;
+      while (first > lo && p[first - 1] > half)
+      {
+        --first;
+      }
+      while (last < hi && p[last + 1] > half)
+      {
+        ++last;
+      }
+      double sum = 0.0, moment = 0.0;
+      for (long i = first; i <= last; ++i)
+      {
+        sum += p[i] - half;
+        moment += (p[i] - half) * static_cast<double>(i);
+      }
+      const double centre = sum > 0.0 ? moment / sum : static_cast<double>(j);
+      crossings.push_back({ centre * m_Frame.Dr, static_cast<double>(last - first + 1) * m_Frame.Dr });
+    }
+    return crossings;
+  }
+
+  // A trace dense in the angular index: Rho[i] is the radius at m = First + i.
+  struct Trace
+  {
+    long                First{ 0 };
+    std::vector<double> Rho;
+    std::vector<char>   Confirmed;
+    bool
+    Empty() const
+    {
+      return Rho.empty();
+    }
+    long
+    Last() const
+    {
+      return First + static_cast<long>(Rho.size()) - 1;
+    }
+    bool
+    Covers(long m) const
+    {
+      return !Rho.empty() && m >= First && m <= Last();
+    }
+    double
+    At(long m) const
+    {
+      return Rho[static_cast<size_t>(m - First)];
+    }
+  };
+
+  // Radial distance to the neighbouring turns of a trace at m (0 where it has none).
+  double
+  TraceSpacing(const Trace & trace, long m) const
+  {
+    double spacing = 0.0;
+    for (long other : { m - m_Frame.Rays, m + m_Frame.Rays })
+    {
+      if (trace.Covers(other) && trace.Covers(m))
+      {
+        const double d = std::abs(trace.At(other) - trace.At(m));
+        spacing = spacing > 0.0 ? std::min(spacing, d) : d;
+      }
+    }
+    return spacing;
+  }
+
+  struct Step
+  {
+    long   M;
+    double Rho;
+    bool   Confirmed;
+  };
+
+  // Follows the spiral from (start, rho) in direction dir (+1: counter-clockwise), with the
+  // trace of the neighbouring slice as prior where it has one.
+  std::vector<Step>
+  Follow(const SliceCrossings & crossings,
+         const ValueSlice &     slice,
+         const double           centre[2],
+         const Trace *          prior,
+         long                   start,
+         double                 rho,
+         int                    dir) const
+  {
+    const double      voxel = m_Settings.Voxel;
+    const double      material = m_Settings.AirLevel + MaterialLevel * m_Contrast;
+    const double      maximumSlope = 0.05 * m_Pitch;
+    std::vector<Step> steps;
+    std::vector<Step> confirmed{ { start, rho, true } };
+    double            slope = 0.0, offset = 0.0;
+    double            missedArc = 0.0, heldArc = 0.0;
+    // A held stretch (material but no separate crossing: touching turns) may be long where
+    // the neighbouring slice vouches for it, short where it does not.
+    const double heldWithPrior = std::max(30.0 * voxel, 2.0 * m_Pitch);
+    const double heldAlone = std::max(4.0 * voxel, 1.0 * m_Pitch);
+    const long   maximumSteps = m_Frame.Rays * (static_cast<long>(std::ceil(m_Frame.RMax / m_Pitch)) + 2);
+    for (long step = 1; step < maximumSteps; ++step)
+    {
+      const long   m = start + dir * step;
+      const auto   a = static_cast<size_t>(((m % m_Frame.Rays) + m_Frame.Rays) % m_Frame.Rays);
+      const Step & last = confirmed.back();
+      const bool   guided = prior != nullptr && prior->Covers(m);
+      const double predicted = guided ? prior->At(m) + offset : last.Rho + slope * static_cast<double>(m - last.M);
+      if (predicted <= 0.0 || predicted > m_Frame.RMax)
+      {
+        break;
+      }
+      const auto & list = crossings.Rays[a];
+      const auto   it = std::lower_bound(
+        list.begin(), list.end(), predicted, [](const Crossing & c, double r) { return c.Radius < r; });
+      size_t best = list.size();
+      double bestDistance = m_Frame.RMax;
+      for (auto candidate : { it, it == list.begin() ? list.end() : it - 1 })
+      {
+        if (candidate != list.end() && std::abs(candidate->Radius - predicted) < bestDistance)
+        {
+          bestDistance = std::abs(candidate->Radius - predicted);
+          best = static_cast<size_t>(candidate - list.begin());
+        }
+      }
+      double spacing = m_Pitch;
+      if (best < list.size())
+      {
+        if (best > 0)
+        {
+          spacing = std::min(spacing, list[best].Radius - list[best - 1].Radius);
+        }
+        if (best + 1 < list.size())
+        {
+          spacing = std::min(spacing, list[best + 1].Radius - list[best].Radius);
+        }
+      }
+      if (guided)
+      {
+        const double priorSpacing = TraceSpacing(*prior, m);
+        if (priorSpacing > 0.0)
+        {
+          spacing = std::min(spacing, priorSpacing);
+        }
+      }
+      const double window = AcceptWindow * std::max(spacing, voxel);
+      if (best < list.size() && bestDistance < window && (guided || std::abs(list[best].Radius - last.Rho) < window))
+      {
+        const double r = list[best].Radius;
+        steps.push_back({ m, r, true });
+        confirmed.push_back({ m, r, true });
+        missedArc = heldArc = 0.0;
+        const size_t count = std::min<size_t>(12, confirmed.size());
+        if (guided)
+        {
+          // Mean offset from the prior over the last confirmed steps it covers.
+          double sum = 0.0;
+          size_t used = 0;
+          for (size_t q = confirmed.size() - count; q < confirmed.size(); ++q)
+          {
+            if (prior->Covers(confirmed[q].M))
+            {
+              sum += confirmed[q].Rho - prior->At(confirmed[q].M);
+              ++used;
+            }
+          }
+          offset = used > 0 ? sum / static_cast<double>(used) : 0.0;
+        }
+        if (count >= 3)
+        {
+          // Least-squares slope of the radius per step along the trace direction.
+          double sx = 0, sy = 0, sxx = 0, sxy = 0;
+          for (size_t q = confirmed.size() - count; q < confirmed.size(); ++q)
+          {
+            const auto x = static_cast<double>(confirmed[q].M);
+            sx += x;
+            sy += confirmed[q].Rho;
+            sxx += x * x;
+            sxy += x * confirmed[q].Rho;
+          }
+          const double denominator = static_cast<double>(count) * sxx - sx * sx;
+          if (denominator > 0.0)
+          {
+            slope = std::clamp((static_cast<double>(count) * sxy - sx * sy) / denominator, -maximumSlope, maximumSlope);
+          }
+        }
+        continue;
+      }
+      const double x = centre[0] + predicted * std::cos(static_cast<double>(m) * m_Frame.Step);
+      const double y = centre[1] + predicted * std::sin(static_cast<double>(m) * m_Frame.Step);
+      const bool   outside = !slice.Inside(x, y);
+      if (outside || slice.Value(x, y, m_Settings.AirLevel) >= material)
+      {
+        // Material (or the edge of the field of view) without a separate crossing: carry
+        // the prediction through.
+        heldArc += predicted * m_Frame.Step;
+        if (heldArc > (guided || outside ? heldWithPrior : heldAlone))
+        {
+          break;
+        }
+        steps.push_back({ m, predicted, false });
+      }
+      else
+      {
+        missedArc += predicted * m_Frame.Step;
+        if (missedArc > 2.0 * voxel)
+        {
+          break;
+        }
+      }
+    }
+    while (!steps.empty() && !steps.back().Confirmed)
+    {
+      steps.pop_back();
+    }
+    return steps;
+  }
+
+  // Traces one slice from a start crossing both ways; the result runs from the inner end.
+  Trace
+  TraceFrom(const SliceCrossings & crossings, size_t slice, const Trace * prior, long start, double rho) const
+  {
+    const ValueSlice sampler(m_Volume, m_Values, slice);
+    double           c[2];
+    Centre(slice, c);
+    const auto inward = Follow(crossings, sampler, c, prior, start, rho, -1);
+    const auto outward = Follow(crossings, sampler, c, prior, start, rho, +1);
+    Trace      trace;
+    trace.First = inward.empty() ? start : inward.back().M;
+    const long last = outward.empty() ? start : outward.back().M;
+    trace.Rho.assign(static_cast<size_t>(last - trace.First + 1), 0.0);
+    trace.Confirmed.assign(trace.Rho.size(), 0);
+    std::vector<char> known(trace.Rho.size(), 0);
+    auto              put = [&](const Step & s) {
+      const auto i = static_cast<size_t>(s.M - trace.First);
+      trace.Rho[i] = s.Rho;
+      trace.Confirmed[i] = s.Confirmed ? 1 : 0;
+      known[i] = 1;
+    };
+    put({ start, rho, true });
+    for (const Step & s : inward)
+    {
+      put(s);
+    }
+    for (const Step & s : outward)
+    {
+      put(s);
+    }
+    // Steps skipped over short gaps: linear between their known neighbours.
+    size_t previous = 0;
+    for (size_t i = 1; i < known.size(); ++i)
+    {
+      if (known[i] == 0)
+      {
+        continue;
+      }
+      for (size_t g = previous + 1; g < i; ++g)
+      {
+        const double t = static_cast<double>(g - previous) / static_cast<double>(i - previous);
+        trace.Rho[g] = (1.0 - t) * trace.Rho[previous] + t * trace.Rho[i];
+      }
+      previous = i;
+    }
+    return trace;
+  }
+
+  // Trace without a prior: from the middle crossing of a ray with the median number of
+  // crossings (away from the noise of the centre and the loose outer end).
+  Trace
+  TraceAlone(const SliceCrossings & crossings, size_t slice) const
+  {
+    std::vector<std::pair<size_t, long>> counts;
+    for (long a = 0; a < m_Frame.Rays; ++a)
+    {
+      counts.emplace_back(crossings.Rays[static_cast<size_t>(a)].size(), a);
+    }
+    std::nth_element(counts.begin(), counts.begin() + static_cast<std::ptrdiff_t>(counts.size() / 2), counts.end());
+    const auto [count, ray] = counts[counts.size() / 2];
+    if (count == 0)
+    {
+      return {};
+    }
+    const double rho = crossings.Rays[static_cast<size_t>(ray)][count / 2].Radius;
+    return TraceFrom(crossings, slice, nullptr, ray, rho);
+  }
+
+  // Trace guided by a neighbouring slice's trace: starts where the prior meets a crossing,
+  // nearest the prior's middle.
+  Trace
+  TraceGuided(const SliceCrossings & crossings, size_t slice, const Trace & prior) const
+  {
+    const long middle = (prior.First + prior.Last()) / 2;
+    const long reach = (prior.Last() - prior.First) / 2;
+    for (long d = 0; d <= reach; ++d)
+    {
+      for (long m : { middle - d, middle + d })
+      {
+        if (!prior.Covers(m))
+        {
+          continue;
+        }
+        const auto   a = static_cast<size_t>(((m % m_Frame.Rays) + m_Frame.Rays) % m_Frame.Rays);
+        const double rho = prior.At(m);
+        double       spacing = TraceSpacing(prior, m);
+        spacing = spacing > 0.0 ? spacing : m_Pitch;
+        for (const Crossing & c : crossings.Rays[a])
+        {
+          if (std::abs(c.Radius - rho) < 0.3 * spacing)
+          {
+            return TraceFrom(crossings, slice, &prior, m, c.Radius);
+          }
+        }
+      }
+    }
+    return TraceAlone(crossings, slice);
+  }
+
+  // Median spacing of successive crossings and median crossing width.
+  void
+  MeasurePitch(const SliceCrossings & crossings)
+  {
+    std::vector<double> spacings, widths;
+    for (const auto & list : crossings.Rays)
+    {
+      for (size_t q = 0; q < list.size(); ++q)
+      {
+        widths.push_back(list[q].Width);
+        if (q > 0)
+        {
+          spacings.push_back(list[q].Radius - list[q - 1].Radius);
+        }
+      }
+    }
+    m_Pitch = spacings.empty() ? m_Frame.RMax : Median(spacings);
+    m_Width = Median(widths);
+  }
+
+  double
+  Pitch() const
+  {
+    return m_Pitch;
+  }
+  double
+  Width() const
+  {
+    return m_Width;
+  }
+
+  // Fraction of a slice's crossings that lie on its trace.
+  double
+  Explained(const SliceCrossings & crossings, const Trace & trace) const
+  {
+    size_t total = 0, onTrace = 0;
+    for (long a = 0; a < m_Frame.Rays; ++a)
+    {
+      const auto & list = crossings.Rays[static_cast<size_t>(a)];
+      total += list.size();
+      for (const Crossing & c : list)
+      {
+        const long first = trace.First + (((a - trace.First) % m_Frame.Rays) + m_Frame.Rays) % m_Frame.Rays;
+        for (long m = first; m <= trace.Last(); m += m_Frame.Rays)
+        {
+          if (std::abs(trace.At(m) - c.Radius) < AcceptWindow * m_Pitch)
+          {
+            ++onTrace;
+            break;
+          }
+        }
+      }
+    }
+    return total > 0 ? static_cast<double>(onTrace) / static_cast<double>(total) : 0.0;
+  }
+
+  Polyline
+  ToPolyline(const Trace & trace, size_t slice) const
+  {
+    double c[2];
+    Centre(slice, c);
+    const auto n = static_cast<long>(trace.Rho.size());
+    const long halfWidth = 4;
+    Polyline   line(2 * trace.Rho.size());
+    for (long i = 0; i < n; ++i)
+    {
+      const long h = std::min({ halfWidth, i, n - 1 - i });
+      double     sum = 0.0;
+      for (long j = i - h; j <= i + h; ++j)
+      {
+        sum += trace.Rho[static_cast<size_t>(j)];
+      }
+      const double rho = sum / static_cast<double>(2 * h + 1);
+      const double angle = static_cast<double>(trace.First + i) * m_Frame.Step;
+      line[2 * i] = c[0] + rho * std::cos(angle);
+      line[2 * i + 1] = c[1] + rho * std::sin(angle);
+    }
+    const ValueSlice sampler(m_Volume, m_Values, slice);
+    const double     material = m_Settings.AirLevel + MaterialLevel * m_Contrast;
+    ExtendEnds(
+      line,
+      [&](double x, double y) { return sampler.Value(x, y, m_Settings.AirLevel) >= material; },
+      m_Settings.Voxel,
+      std::max(m_Width, m_Settings.Voxel) + 2.0 * m_Settings.Voxel);
+    return line;
+  }
+
+private:
+  const SheetVolumeView & m_Volume;
+  const float *           m_Values;
+  Settings                m_Settings;
+  double                  m_Contrast;
+  double                  m_Offset[2]{ 0.0, 0.0 };
+  PolarFrame              m_Frame;
+  double                  m_Pitch{ 1.0 };
+  double                  m_Width{ 1.0 };
+};
+// A trace whose end strays from the median end of the slices within EndReach of it (by more
+// than EndTolerance of arc) is cut back to it or continued along its nearest neighbour
+// that reaches it: a sheet's cut edge runs straight or slowly along the roll axis, while a
+// trace that stops early (faint end) or runs on (noise) does not.
+constexpr long   EndReach = 5;
+constexpr double EndTolerance = 4.0; // voxels
+
+void
+MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
+                      const std::vector<size_t> &  slices,
+                      const PolarFrame &           frame,
+                      double                       voxel)
+{
+  const auto        n = static_cast<long>(slices.size());
+  std::vector<long> firsts(slices.size(), 0), lasts(slices.size(), 0);
+  for (long i = 0; i < n; ++i)
+  {
+    const auto & t = traces[slices[static_cast<size_t>(i)]];
+    firsts[static_cast<size_t>(i)] = t.Empty() ? 0 : t.First;
+    lasts[static_cast<size_t>(i)] = t.Empty() ? 0 : t.Last();
+  }
+  const std::vector<Tracer::Trace> original = traces;
+  for (long i = 0; i < n; ++i)
+  {
+    auto & trace = traces[slices[static_cast<size_t>(i)]];
+    if (trace.Empty())
+    {
+      continue;
+    }
+    std::vector<double> f, l;
+    for (long j = std::max(0L, i - EndReach); j <= std::min(n - 1, i + EndReach); ++j)
+    {
+      if (!original[slices[static_cast<size_t>(j)]].Empty())
+      {
+        f.push_back(static_cast<double>(firsts[static_cast<size_t>(j)]));
+        l.push_back(static_cast<double>(lasts[static_cast<size_t>(j)]));
+      }
+    }
+    const auto medianFirst = static_cast<long>(Median(f)), medianLast = static_cast<long>(Median(l));
+    auto       tolerance = [&](long m) {
+      const double rho = std::max(voxel, trace.Covers(m) ? trace.At(m) : voxel);
+      return static_cast<long>(std::ceil(EndTolerance * voxel / (rho * frame.Step)));
+    };
+    // Cut back.
+    if (trace.Last() > medianLast + tolerance(medianLast) && medianLast > trace.First)
+    {
+      trace.Rho.resize(static_cast<size_t>(medianLast - trace.First + 1));
+      trace.Confirmed.resize(trace.Rho.size());
+    }
+    if (trace.First < medianFirst - tolerance(medianFirst) && medianFirst < trace.Last())
+    {
+      const auto cut = static_cast<std::ptrdiff_t>(medianFirst - trace.First);
+      trace.Rho.erase(trace.Rho.begin(), trace.Rho.begin() + cut);
+      trace.Confirmed.erase(trace.Confirmed.begin(), trace.Confirmed.begin() + cut);
+      trace.First = medianFirst;
+    }
+    // Continue along the nearest neighbour that reaches the median end.
+    for (int end = 0; end < 2; ++end)
+    {
+      const long target = end == 0 ? medianFirst : medianLast;
+      const long at = end == 0 ? trace.First : trace.Last();
+      if (std::abs(target - at) <= tolerance(at))
+      {
+        continue;
+      }
+      if ((end == 0 && target > at) || (end == 1 && target < at))
+      {
+        continue;
+      }
+      for (long d = 1; d <= EndReach; ++d)
+      {
+        const Tracer::Trace * neighbour = nullptr;
+        for (long j : { i - d, i + d })
+        {
+          if (j >= 0 && j < n && original[slices[static_cast<size_t>(j)]].Covers(target) &&
+              original[slices[static_cast<size_t>(j)]].Covers(at))
+          {
+            neighbour = &original[slices[static_cast<size_t>(j)]];
+            break;
+          }
+        }
+        if (neighbour == nullptr)
+        {
+          continue;
+        }
+        // Offset from the neighbour over the last quarter turn both have.
+        double sum = 0.0;
+        long   used = 0;
+        for (long m = at; used < frame.Rays / 4 && trace.Covers(m) && neighbour->Covers(m); m += end == 0 ? 1 : -1)
+        {
+          sum += trace.At(m) - neighbour->At(m);
+          ++used;
+        }
+        const double offset = used > 0 ? sum / static_cast<double>(used) : 0.0;
+        if (end == 1)
+        {
+          for (long m = at + 1; m <= target; ++m)
+          {
+            trace.Rho.push_back(neighbour->At(m) + offset);
+            trace.Confirmed.push_back(0);
+          }
+        }
+        else
+        {
+          std::vector<double> rho;
+          for (long m = target; m < at; ++m)
+          {
+            rho.push_back(neighbour->At(m) + offset);
+          }
+          trace.Rho.insert(trace.Rho.begin(), rho.begin(), rho.end());
+          trace.Confirmed.insert(trace.Confirmed.begin(), rho.size(), 0);
+          trace.First = target;
+        }
+        break;
+      }
+    }
+  }
+}
+} // namespace
+
+void
+ExtendEnds(Polyline & line, const std::function<bool(double, double)> & inside, double voxel, double maximum)
+{
+  for (int end = 0; end < 2; ++end)
+  {
+    const size_t n = line.size() / 2;
+    if (n < 2)
+    {
+      return;
+    }
+    // Tangent over about one voxel, away from the end.
+    const size_t last = end == 0 ? 0 : n - 1;
+    size_t       inner = last;
+    const double x0 = line[2 * last], y0 = line[2 * last + 1];
+    while (true)
+    {
+      inner = end == 0 ? inner + 1 : inner - 1;
+      if (std::hypot(line[2 * inner] - x0, line[2 * inner + 1] - y0) >= voxel || inner == 0 || inner == n - 1)
+      {
+        break;
+      }
+    }
+    double       tx = x0 - line[2 * inner], ty = y0 - line[2 * inner + 1];
+    const double norm = std::hypot(tx, ty);
+    if (norm <= 0.0)
+    {
+      continue;
+    }
+    tx /= norm;
+    ty /= norm;
+    const double step = 0.25 * voxel;
+    double       reach = 0.0;
+    while (reach + step <= maximum && inside(x0 + (reach + step) * tx, y0 + (reach + step) * ty))
+    {
+      reach += step;
+    }
+    if (reach > 0.0)
+    {
+      const double x = x0 + reach * tx, y = y0 + reach * ty;
+      line.insert(end == 0 ? line.begin() : line.end(), { x, y });
+    }
+  }
+}
+
+Result
+TraceRoll(const SheetVolumeView &             volume,
+          const float *                       values,
+          const Settings &                    settings,
+          const std::function<void(double)> & progress)
+{
+  Result              result;
+  const size_t        nx = volume.Size[0], ny = volume.Size[1], nz = volume.Size[2];
+  std::vector<size_t> material;
+  for (size_t k = 0; k < nz; ++k)
+  {
+    const uint8_t * mask = volume.Mask + k * nx * ny;
+    if (std::any_of(mask, mask + nx * ny, [](uint8_t v) { return v != 0; }))
+    {
+      material.push_back(k);
+    }
+  }
+  result.Slices.resize(nz);
+  if (material.empty() || !(settings.SheetLevel > settings.AirLevel))
+  {
+    return result;
+  }
+  Tracer tracer(volume, values, settings);
+  tracer.BuildFrame(material);
+
+  // Seed: the middle slice with material, on the mean profile of its neighbours.
+  const size_t seed = material[material.size() / 2];
+  auto         seedCrossings = [&]() {
+    std::vector<size_t> around;
+    for (size_t k : material)
+    {
+      if (std::abs(static_cast<long>(k) - static_cast<long>(seed)) <= SeedHalfWidth)
+      {
+        around.push_back(k);
+      }
+    }
+    return tracer.FindCrossings(seed, around);
+  };
+  SliceCrossings crossings = seedCrossings();
+  tracer.MeasurePitch(crossings);
+  auto seedTrace = tracer.TraceAlone(crossings, seed);
+  // The centroid line need not pass through the spiral's centre (an irregular roll, a field
+  // of view that cuts it): re-centre on the innermost turn and trace again.
+  for (int pass = 0; pass < 2 && !seedTrace.Empty(); ++pass)
+  {
+    const long rays = tracer.Frame().Rays;
+    if (seedTrace.Last() - seedTrace.First < 3 * rays / 2)
+    {
+      break;
+    }
+    double c[2], mean[2] = { 0.0, 0.0 };
+    tracer.Centre(seed, c);
+    for (long m = seedTrace.First; m < seedTrace.First + rays; ++m)
+    {
+      const double angle = static_cast<double>(m) * tracer.Frame().Step;
+      mean[0] += seedTrace.At(m) * std::cos(angle) / static_cast<double>(rays);
+      mean[1] += seedTrace.At(m) * std::sin(angle) / static_cast<double>(rays);
+    }
+    if (std::hypot(mean[0], mean[1]) < 0.5 * settings.Voxel)
+    {
+      break;
+    }
+    tracer.SetOffset(tracer.GetOffset()[0] + mean[0], tracer.GetOffset()[1] + mean[1]);
+    tracer.BuildFrame(material);
+    crossings = seedCrossings();
+    tracer.MeasurePitch(crossings);
+    seedTrace = tracer.TraceAlone(crossings, seed);
+  }
+  result.Pitch = tracer.Pitch();
+  result.RayThickness = tracer.Width();
+  result.CentreOffset[0] = tracer.GetOffset()[0];
+  result.CentreOffset[1] = tracer.GetOffset()[1];
+  if (seedTrace.Empty())
+  {
+    return result;
+  }
+  const double turns =
+    static_cast<double>(seedTrace.Last() - seedTrace.First) / static_cast<double>(tracer.Frame().Rays);
+  result.Explained = tracer.Explained(crossings, seedTrace);
+  // A spiral moves outwards by about a turn spacing per turn; a curve circling the centre
+  // (a flat or folded sheet through it) does not.
+  std::vector<double> growth;
+  for (long m = seedTrace.First; m + tracer.Frame().Rays <= seedTrace.Last(); ++m)
+  {
+    growth.push_back(seedTrace.At(m + tracer.Frame().Rays) - seedTrace.At(m));
+  }
+  result.Rolled =
+    turns >= 1.0 && result.Explained >= 0.6 && Median(growth) >= std::max(settings.Voxel, 0.5 * tracer.Width());
+  progress(0.1);
+
+  // Every slice, outwards from the seed, with the previous slice's trace as prior. The
+  // crossings of a batch of slices are found in parallel.
+  std::vector<Tracer::Trace> traces(nz);
+  const size_t               batch = 16;
+  size_t                     done = 0;
+  const long                 seedIndex = static_cast<long>(material.size() / 2);
+  for (int dir : { +1, -1 })
+  {
+    Tracer::Trace prior = seedTrace;
+    for (long q = dir > 0 ? seedIndex : seedIndex - 1; q >= 0 && q < static_cast<long>(material.size());)
+    {
+      std::vector<size_t> slices;
+      for (long r = q; r >= 0 && r < static_cast<long>(material.size()) && slices.size() < batch; r += dir)
+      {
+        slices.push_back(material[static_cast<size_t>(r)]);
+      }
+      std::vector<SliceCrossings> found(slices.size());
+      MultiThreaderBase::New()->ParallelizeArray(
+        0, slices.size(), [&](SizeValueType i) { found[i] = tracer.FindCrossings(slices[i], { slices[i] }); }, nullptr);
+      for (size_t i = 0; i < slices.size(); ++i)
+      {
+        traces[slices[i]] = tracer.TraceGuided(found[i], slices[i], prior);
+        if (!traces[slices[i]].Empty())
+        {
+          prior = traces[slices[i]];
+        }
+      }
+      q += dir * static_cast<long>(slices.size());
+      done += slices.size();
+      progress(0.1 + 0.85 * static_cast<double>(done) / static_cast<double>(material.size()));
+    }
+  }
+
+  MatchEndsToNeighbours(traces, material, tracer.Frame(), settings.Voxel);
+
+  // Neighbouring traces that disagree by half a turn spacing at the same angle: a turn
+  // was lost or jumped between them.
+  for (size_t i = 1; i < material.size(); ++i)
+  {
+    const auto & a = traces[material[i - 1]];
+    const auto & b = traces[material[i]];
+    if (a.Empty() || b.Empty())
+    {
+      continue;
+    }
+    for (long m = std::max(a.First, b.First); m <= std::min(a.Last(), b.Last()); ++m)
+    {
+      if (std::abs(a.At(m) - b.At(m)) > 0.5 * result.Pitch)
+      {
+        result.Disagreements.emplace_back(material[i],
+                                          static_cast<double>(m - b.First) / static_cast<double>(tracer.Frame().Rays));
+        break;
+      }
+    }
+  }
+  for (size_t k : material)
+  {
+    const auto & trace = traces[k];
+    if (trace.Rho.size() < 4)
+    {
+      continue;
+    }
+    SliceTrace & out = result.Slices[k];
+    out.Line = tracer.ToPolyline(trace, k);
+    out.Confirmed = static_cast<double>(std::count(trace.Confirmed.begin(), trace.Confirmed.end(), 1)) /
+                    static_cast<double>(trace.Confirmed.size());
+    out.Turns = static_cast<double>(trace.Last() - trace.First) / static_cast<double>(tracer.Frame().Rays);
+  }
+  progress(1.0);
+  return result;
+}
+} // namespace RollTracing
+} // end namespace itk
