@@ -716,13 +716,24 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
       expectedLength[k] = around.empty() ? referenceLength : Median(around);
     }
   }
+  // A slice that cuts the sheet's edge along the axis holds only part of it (blurred, half
+  // as bright): its trace is neither the sheet's middle nor its texture.
+  std::vector<double> areas;
+  for (size_t k = 0; k < nz; ++k)
+  {
+    if (lengths[k] > 0.0)
+    {
+      areas.push_back(area[k]);
+    }
+  }
+  const double      partialArea = 0.75 * Median(areas);
   std::vector<char> good(nz, 0);
   long              firstGood = -1, lastGood = -1;
   auto              selectGood = [&](double tolerance) {
     firstGood = lastGood = -1;
     for (size_t k = 0; k < nz; ++k)
     {
-      good[k] = lengths[k] > 0.0 && std::abs(lengths[k] - expectedLength[k]) <= tolerance;
+      good[k] = lengths[k] > 0.0 && std::abs(lengths[k] - expectedLength[k]) <= tolerance && area[k] >= partialArea;
       if (good[k])
       {
         firstGood = firstGood < 0 ? static_cast<long>(k) : firstGood;

@@ -264,7 +264,9 @@ public:
       const long   j = peaks[q];
       const double left = *std::min_element(p.begin() + lo, p.begin() + j + 1);
       const double right = *std::min_element(p.begin() + j, p.begin() + hi + 1);
-      const double half = 0.5 * (p[j] + std::max({ left, right, m_Settings.AirLevel }));
+      // Weights above the higher of the dips beside the peak and the air/material midpoint:
+      // the whole crossing, sub-voxel, but not its neighbours' flanks.
+      const double half = std::max({ left, right, m_Settings.AirLevel + MaterialLevel * m_Contrast });
       long         first = j, last = j;
       while (first > lo && p[first - 1] > half)
       {
