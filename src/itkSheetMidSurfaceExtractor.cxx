@@ -966,8 +966,13 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
     m_Report.Warnings.push_back(text.str());
   }
 
-  // Rows: triangular-weighted average of the slices within one row spacing.
-  const double span = static_cast<double>(lastGood - firstGood) * sz;
+  // Rows: triangular-weighted average of the slices within one row spacing. Where a slice
+  // beyond the first or last row holds part of the sheet (its edge along the axis), the
+  // mesh reaches half a slice further, to the middle of that slice's voxels, on the curve
+  // of the last good slice.
+  const double below = firstGood > 0 && area[firstGood - 1] > 0.0 ? 0.5 * sz : 0.0;
+  const double above = lastGood + 1 < static_cast<long>(nz) && area[lastGood + 1] > 0.0 ? 0.5 * sz : 0.0;
+  const double span = static_cast<double>(lastGood - firstGood) * sz + below + above;
   const auto   rows = static_cast<size_t>(std::max(2.0, std::ceil(span / hw) + 1.0));
   const double rowSpacing = span / static_cast<double>(rows - 1);
   const double kernel = std::max(rowSpacing, sz);
@@ -978,12 +983,13 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
   mesh.GridIndex.resize(2 * rows * columns);
   for (size_t r = 0; r < rows; ++r)
   {
-    const double        z = static_cast<double>(firstGood) * sz + static_cast<double>(r) * rowSpacing;
+    const double        z = static_cast<double>(firstGood) * sz - below + static_cast<double>(r) * rowSpacing;
+    const double        zc = std::clamp(z, static_cast<double>(firstGood) * sz, static_cast<double>(lastGood) * sz);
     std::vector<double> sum(2 * columns, 0.0);
     double              weightSum = 0.0;
     for (long k = firstGood; k <= lastGood; ++k)
     {
-      const double weight = 1.0 - std::abs(static_cast<double>(k) * sz - z) / kernel;
+      const double weight = 1.0 - std::abs(static_cast<double>(k) * sz - zc) / kernel;
       if (weight <= 0.0)
       {
         continue;

@@ -505,9 +505,11 @@ RunUnwrap(UnwrapOptions & options)
   const double     restoreDomainSigma = restore ? voxel : 0.0;
   constexpr double RestoreRangeFactor = 2.0;
   constexpr double RestoreRegularization = 0.1;
-  const double     medianRadius = AutoOrLength(options.Median, "--median", 0.5 * voxel);
-  const double     smoothSigma = restore ? 0.0 : AutoOrLength(options.Smooth, "--smooth", 0.5 * voxel);
-  const double     displayBorder = AutoOrLength(options.DisplayBorder, "--display-border", meshReport.SheetThickness);
+  // A noisy scan (the segmentation smoothed it) gets a texture denoised as strongly.
+  const double denoiseWidth = std::max(0.5, segmentation->GetAppliedDenoisingSigma()) * voxel;
+  const double medianRadius = AutoOrLength(options.Median, "--median", denoiseWidth);
+  const double smoothSigma = restore ? 0.0 : AutoOrLength(options.Smooth, "--smooth", denoiseWidth);
+  const double displayBorder = AutoOrLength(options.DisplayBorder, "--display-border", meshReport.SheetThickness);
   // The sheet's core: the layers within half a voxel of the surface on the chosen side.
   const double coreWidth = 0.5 * voxel;
   auto         surfaceMesh = itk::SheetMeshToMesh<MeshType>(surface);
@@ -817,13 +819,15 @@ RegisterUnwrapCommand(CLI::App & app)
     ->add_option("--median",
                  options.Median,
                  "half-side of the square median filter denoising the texture, mm (0: none), or auto: half the voxel "
-                 "size (specks smaller than the scan resolves go, edges stay)")
+                 "size (specks smaller than the scan resolves go, edges stay), on a noisy scan the segmentation's "
+                 "smoothing width")
     ->capture_default_str()
     ->group(tex);
   command
     ->add_option("--smooth",
                  options.Smooth,
-                 "Gaussian sigma smoothing the texture after the median, mm (0: none), or auto: half the voxel size")
+                 "Gaussian sigma smoothing the texture after the median, mm (0: none), or auto: half the voxel size, "
+                 "on a noisy scan the segmentation's smoothing width")
     ->capture_default_str()
     ->group(tex);
   command
