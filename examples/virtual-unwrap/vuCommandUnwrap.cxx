@@ -434,7 +434,8 @@ RunUnwrap(UnwrapOptions & options)
                       { "spacing_mm", { spacing[0], spacing[1], spacing[2] } },
                       { "origin_mm", { volume->GetOrigin()[0], volume->GetOrigin()[1], volume->GetOrigin()[2] } },
                       { "rescale",
-                        { { "slope", reader->GetRescaleSlope() }, { "intercept", reader->GetRescaleIntercept() } } } };
+                        { { "slope", reader->GetRescaleSlope() }, { "intercept", reader->GetRescaleIntercept() } } },
+                      { "geometry_corrections", GeometryCorrectionsJson(*reader) } };
   endStage("read");
 
   // 2. Segment.

@@ -52,9 +52,24 @@ AddReaderOptions(CLI::App & command, ReaderOptions & options)
     .add_option("--slice-tolerance",
                 options.SliceSpacingTolerance,
                 "how far a DICOM slice may lie from its place on the regular grid, as a fraction of the slice "
-                "spacing, before the series is refused as irregular")
+                "spacing, before the series is called irregular (and resampled)")
     ->check(CLI::Range(1e-6, 0.5))
     ->capture_default_str();
+  command.add_flag("--no-resample",
+                   options.NoResample,
+                   "refuse a sheared (gantry tilt) or unevenly spaced DICOM series instead of resampling it onto a "
+                   "regular grid");
+  command
+    .add_option("--interpolator",
+                options.Interpolator,
+                "interpolation of a resampled DICOM series: nearest, linear or bspline (cubic)")
+    ->check(CLI::IsMember({ "nearest", "linear", "bspline" }))
+    ->capture_default_str();
+  command
+    .add_option("--resample-spacing",
+                options.ResampleSpacing,
+                "slice spacing in mm of a resampled DICOM series (default: its smallest slice spacing)")
+    ->check(CLI::PositiveNumber);
 }
 
 void
@@ -109,5 +124,50 @@ ConfigureReader(const ReaderOptions & options, const std::string & path, itk::CT
   }
   reader.SetShrinkFactor(options.Shrink);
   reader.SetSliceSpacingTolerance(options.SliceSpacingTolerance);
+  reader.SetResampleIrregularSeries(!options.NoResample);
+  reader.SetSliceInterpolator(itk::SliceInterpolatorFromString(options.Interpolator));
+  reader.SetResampledSliceSpacing(options.ResampleSpacing);
+}
+
+nlohmann::json
+GeometryCorrectionsJson(const itk::CTVolumeReader & reader)
+{
+  const itk::DicomSeriesGeometry & geometry = reader.GetSeriesGeometry();
+  if (!reader.GetResampled())
+  {
+    return nullptr;
+  }
+  auto slice = [&geometry](size_t k) {
+    const double base = geometry.Stack.Slices.front().Position.GetVectorFromOrigin() * geometry.Normal;
+    return nlohmann::json{ { "file", geometry.Stack.Slices[k].File }, { "location_mm", base + geometry.Locations[k] } };
+  };
+  nlohmann::json json;
+  json["sheared"] = geometry.Sheared;
+  json["tilt_deg"] = geometry.TiltDegrees;
+  json["drift_mm_per_mm"] = { geometry.DriftPerMillimetre[0], geometry.DriftPerMillimetre[1] };
+  json["maximum_drift_mm"] = geometry.MaximumDrift;
+  json["spacing_runs"] = nlohmann::json::array();
+  for (const auto & run : geometry.Runs)
+  {
+    json["spacing_runs"].push_back(
+      { { "spacing_mm", run.Spacing }, { "from", slice(run.First) }, { "to", slice(run.Last) } });
+  }
+  json["gaps"] = nlohmann::json::array();
+  for (const auto & gap : geometry.Gaps)
+  {
+    json["gaps"].push_back({ { "missing_slices", gap.Missing },
+                             { "gap_mm", gap.Size },
+                             { "usual_spacing_mm", gap.UsualSpacing },
+                             { "after", slice(gap.Before) },
+                             { "before", slice(gap.Before + 1) } });
+  }
+  const itk::RegularGrid & grid = reader.GetResampledGrid();
+  json["resampled"] = { { "size", { grid.Size[0], grid.Size[1], grid.Size[2] } },
+                        { "spacing_mm", { grid.Spacing[0], grid.Spacing[1], grid.Spacing[2] } },
+                        { "origin_mm", { grid.Origin[0], grid.Origin[1], grid.Origin[2] } },
+                        { "interpolator", itk::ToString(reader.GetSliceInterpolator()) },
+                        { "voxels_without_data", reader.GetVoxelsWithoutData() },
+                        { "value_without_data", "NaN" } };
+  return json;
 }
 } // namespace vu
