@@ -94,8 +94,10 @@ namespace itk {
  *   slice in a gap may lie and still take its values; (0, 0.5], default 0.05.
  * - ResampleIrregularSeries: resample a sheared or unevenly spaced DICOM series onto a
  *   regular grid (true, default), or refuse it (false).
- * - SliceInterpolator: NearestNeighbor, Linear (default) or BSpline (cubic), used in the
- *   slice plane and between the two slices around a voxel.
+ * - SliceInterpolator: NearestNeighbor, Linear or BSpline (cubic, default), used in the
+ *   slice plane and between the slices around a voxel. Linear interpolation blurs: on the
+ *   standard phantom written with a 15 degree tilt it costs 0.03-0.045 of texture NCC,
+ *   the cubic B-spline 0.01 or less (docs/ct-reading.md).
  * - ResampledSliceSpacing: slice spacing of the regular grid, mm, >= 0; default 0: the
  *   smallest slice spacing of the series (the spacing of its most finely spaced run).
  *
@@ -284,7 +286,7 @@ private:
   unsigned              m_ShrinkFactor{ 1 };
   double                m_SliceSpacingTolerance{ 0.05 };
   bool                  m_ResampleIrregularSeries{ true };
-  SliceInterpolatorEnum m_SliceInterpolator{ SliceInterpolatorEnum::Linear };
+  SliceInterpolatorEnum m_SliceInterpolator{ SliceInterpolatorEnum::BSpline };
   double                m_ResampledSliceSpacing{ 0.0 };
 
   std::string              m_InputKind;

@@ -57,10 +57,11 @@ namespace itk {
  * - SliceLocations (mm, default empty: one slice per input slice): where along the input's
  *   third axis, from its first slice, the slices are taken; increasing, within the input.
  *   SliceLocationsWithSpacingChange() gives a series whose spacing changes mid-way.
- * Such slices are sampled from the input by cubic B-spline interpolation
- * (itk::BSplineInterpolateImageFunction), which gives back the input's values at its own
- * voxels; SliceThickness is then the distance to the next slice, SpacingBetweenSlices is
- * written only for evenly spaced slices. Both are refused for the other formats.
+ * Such slices are sampled from the input by Lanczos-windowed sinc interpolation of radius
+ * 4 (itk::WindowedSincInterpolateImageFunction): the closest ITK comes to sampling the
+ * scanned object itself, and it gives back the input's values at its own voxels;
+ * SliceThickness is then the distance to the next slice, SpacingBetweenSlices is written
+ * only for evenly spaced slices. Both are refused for the other formats.
  * - OutsideValue (HU, default -1000, air): written where a sheared slice reaches beyond
  *   the input.
  *

@@ -41,7 +41,8 @@ public:
     NearestNeighbor,
     /** Bilinear in the slice plane, linear between the bracketing slices. */
     Linear,
-    /** Cubic B-spline in the slices' index space (sharper, may overshoot at edges). */
+    /** Cubic B-spline in the slices' index space: keeps fine detail (ink) that linear
+     * interpolation blurs, may overshoot slightly at sharp edges. */
     BSpline
   };
 };

@@ -17,7 +17,6 @@
  *=========================================================================*/
 #include "itkCTVolumeWriter.h"
 
-#include "itkBSplineInterpolateImageFunction.h"
 #include "itkClampImageFilter.h"
 #include "itkGDCMImageIO.h"
 #include "itkImageFileWriter.h"
@@ -29,6 +28,7 @@
 #include "itkRoundImageFilter.h"
 #include "itkShiftScaleImageFilter.h"
 #include "itkTIFFImageIO.h"
+#include "itkWindowedSincInterpolateImageFunction.h"
 
 #include "gdcmUIDGenerator.h"
 
@@ -234,8 +234,7 @@ CTVolumeWriter::SampleSlices(const std::vector<double> & locations, std::vector<
   slices->SetSpacing(spacing);
   slices->SetDirection(direction);
 
-  auto interpolator = BSplineInterpolateImageFunction<ImageType, double, float>::New();
-  interpolator->SetSplineOrder(3);
+  auto interpolator = WindowedSincInterpolateImageFunction<ImageType, 4, Function::LanczosWindowFunction<4>>::New();
   interpolator->SetInputImage(m_Input);
   float * buffer = slices->GetBufferPointer();
   MultiThreaderBase::New()->ParallelizeArray(

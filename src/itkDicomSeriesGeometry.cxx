@@ -54,7 +54,8 @@ FormatMillimetres(double value)
 {
   std::ostringstream text;
   text.precision(4);
-  text << value;
+  // Sums of spacings leave rounding residue where a slice lies at 0 mm.
+  text << (std::abs(value) < 1e-9 ? 0.0 : value);
   return text.str();
 }
 

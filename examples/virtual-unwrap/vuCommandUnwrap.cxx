@@ -424,6 +424,16 @@ RunUnwrap(UnwrapOptions & options)
   {
     warnings.push_back("read: " + w);
   }
+  // Segmentation and meshing need a value in every voxel; the texture samples the scan as
+  // read, so a sheet that crosses voxels without data shows holes (NaN) there.
+  const FilledVolume filled = FillVoxelsWithoutData(volume);
+  if (filled.Filled > 0)
+  {
+    std::ostringstream text;
+    text << filled.Filled << " voxels without data (NaN) taken as " << filled.Value
+         << " (the median of the scan) for segmentation, meshing and the preview; the texture samples them as NaN";
+    warnings.push_back("read: " + text.str());
+  }
   const auto size = volume->GetLargestPossibleRegion().GetSize();
   const auto spacing = volume->GetSpacing();
   report["input"] = { { "path", options.Input },
@@ -441,7 +451,7 @@ RunUnwrap(UnwrapOptions & options)
   // 2. Segment.
   progress.Start("segment", "segmenting the sheet");
   auto segmentation = itk::SheetSegmentationImageFilter<VolumeType, MaskType>::New();
-  segmentation->SetInput(volume);
+  segmentation->SetInput(filled.Volume);
   segmentation->SetAutomaticThreshold(automaticThreshold);
   segmentation->SetThreshold(threshold);
   progress.Observe(segmentation);
@@ -452,7 +462,7 @@ RunUnwrap(UnwrapOptions & options)
   progress.Start("mesh", "meshing the sheet's mid-surface");
   auto surfaceFilter = itk::SheetMidSurfaceMeshFilter<MaskType, MeshType>::New();
   surfaceFilter->SetInput(segmentation->GetOutput());
-  surfaceFilter->SetIntensityImage(volume);
+  surfaceFilter->SetIntensityImage(filled.Volume);
   surfaceFilter->SetMethod(itk::SheetSurfaceMethodFromString(options.Method));
   surfaceFilter->SetSpacingAlongSheet(options.MeshSpacing);
   surfaceFilter->SetSpacingAlongAxis(options.MeshSpacing);
@@ -658,7 +668,7 @@ RunUnwrap(UnwrapOptions & options)
       uv[2 * i + 1] = (flat.Points[3 * i + 1] - (tOrigin[1] - 0.5 * pixelSize)) / height;
     }
     WriteSheetMeshObj((staging / "flat.obj").string(), flat, uv, "texture.png");
-    WritePreview(volume, surface, texture8, staging / "preview.png");
+    WritePreview(filled.Volume, surface, texture8, staging / "preview.png");
   }
   catch (...)
   {

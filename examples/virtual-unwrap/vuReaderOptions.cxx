@@ -19,6 +19,9 @@
 
 #include "vuCommands.h"
 
+#include "itkImageDuplicator.h"
+
+#include <algorithm>
 #include <cmath>
 
 namespace vu {
@@ -169,5 +172,44 @@ GeometryCorrectionsJson(const itk::CTVolumeReader & reader)
                         { "voxels_without_data", reader.GetVoxelsWithoutData() },
                         { "value_without_data", "NaN" } };
   return json;
+}
+
+FilledVolume
+FillVoxelsWithoutData(itk::CTVolumeReader::OutputImageType * volume)
+{
+  FilledVolume result;
+  result.Volume = volume;
+  const float * values = volume->GetBufferPointer();
+  const size_t  count = volume->GetBufferedRegion().GetNumberOfPixels();
+  result.Filled =
+    static_cast<itk::SizeValueType>(std::count_if(values, values + count, [](float v) { return !std::isfinite(v); }));
+  if (result.Filled == 0 || result.Filled == count)
+  {
+    return result;
+  }
+  // The median of about a million voxels with data, evenly spread.
+  const size_t       stride = std::max<size_t>(1, count / 1000000);
+  std::vector<float> sample;
+  for (size_t i = 0; i < count; i += stride)
+  {
+    if (std::isfinite(values[i]))
+    {
+      sample.push_back(values[i]);
+    }
+  }
+  if (sample.empty())
+  {
+    sample.push_back(*std::find_if(values, values + count, [](float v) { return std::isfinite(v); }));
+  }
+  std::nth_element(sample.begin(), sample.begin() + sample.size() / 2, sample.end());
+  result.Value = sample[sample.size() / 2];
+  auto duplicator = itk::ImageDuplicator<itk::CTVolumeReader::OutputImageType>::New();
+  duplicator->SetInputImage(volume);
+  duplicator->Update();
+  result.Volume = duplicator->GetOutput();
+  float * filled = result.Volume->GetBufferPointer();
+  std::replace_if(
+    filled, filled + count, [](float v) { return !std::isfinite(v); }, static_cast<float>(result.Value));
+  return result;
 }
 } // namespace vu

@@ -38,7 +38,7 @@ struct ReaderOptions
   unsigned int        Shrink{ 1 };
   double              SliceSpacingTolerance{ 0.05 };
   bool                NoResample{ false };
-  std::string         Interpolator{ "linear" };
+  std::string         Interpolator{ "bspline" };
   double              ResampleSpacing{ 0.0 };
 };
 
@@ -58,6 +58,20 @@ ConfigureReader(const ReaderOptions & options, const std::string & path, itk::CT
  * gaps with their positions, and the grid it resampled onto. */
 nlohmann::json
 GeometryCorrectionsJson(const itk::CTVolumeReader & reader);
+
+/** A volume whose voxels without data (NaN: the corners of a resampled sheared series,
+ * the gaps of missing slices) hold a value, for the stages that need one in every voxel
+ * (segmentation, meshing, the preview): Volume is a copy with those voxels set to Value,
+ * the median of the voxels with data (in a scan of a scroll, the air), or the input itself
+ * when Filled is 0. */
+struct FilledVolume
+{
+  itk::CTVolumeReader::OutputImageType::Pointer Volume;
+  itk::SizeValueType                            Filled{ 0 };
+  double                                        Value{ 0.0 };
+};
+FilledVolume
+FillVoxelsWithoutData(itk::CTVolumeReader::OutputImageType * volume);
 } // namespace vu
 
 #endif
