@@ -523,35 +523,39 @@ CountVoxelsWithoutData(const DicomSeriesGeometry & geometry, const RegularGrid &
 {
   auto transform = SliceStackTransform::New();
   transform->SetGeometry(geometry);
+  // The grid's points are computed as ResampleImageFilter computes them, so that a voxel
+  // whose centre falls on the edge of a slice counts as the filter decides.
+  auto image = ImageType::New();
+  image->SetOrigin(grid.Origin);
+  image->SetSpacing(grid.Spacing);
+  image->SetDirection(grid.Direction);
   const SizeValueType perSlice = grid.Size[0] * grid.Size[1];
   SizeValueType       without = 0;
   for (SizeValueType z = 0; z < grid.Size[2]; ++z)
   {
-    // The grid's axes are the slices' axes: the in-plane index of a voxel is its grid
-    // index shifted by the slice origin at that depth, so one corner tells the slice.
-    ImageType::PointType corner = grid.Origin;
-    for (unsigned k = 0; k < 3; ++k)
+    // The grid's axes are the slices' axes: whether a voxel has data depends on its
+    // column alone in one direction and on its row alone in the other.
+    SizeValueType inside[2] = { 0, 0 };
+    bool          covered = true;
+    for (unsigned axis = 0; axis < 2 && covered; ++axis)
     {
-      corner[k] += static_cast<double>(z) * grid.Spacing[2] * grid.Direction[k][2];
+      for (SizeValueType g = 0; g < grid.Size[axis]; ++g)
+      {
+        ImageType::IndexType index{ { 0, 0, static_cast<IndexValueType>(z) } };
+        index[axis] = static_cast<IndexValueType>(g);
+        ImageType::PointType point;
+        image->TransformIndexToPhysicalPoint(index, point);
+        const auto sliceIndex = transform->TransformPoint(point);
+        if (std::isnan(sliceIndex[2]))
+        {
+          covered = false;
+          break;
+        }
+        const double size = static_cast<double>(geometry.Stack.Size[axis]);
+        inside[axis] += sliceIndex[axis] >= -0.5 && sliceIndex[axis] < size - 0.5 ? 1 : 0;
+      }
     }
-    const auto index = transform->TransformPoint(corner);
-    if (std::isnan(index[2]))
-    {
-      without += perSlice;
-      continue;
-    }
-    SizeValueType inside[2];
-    for (unsigned axis = 0; axis < 2; ++axis)
-    {
-      // Grid index g covers slice index index[axis] + g * step, inside [-0.5, size - 0.5).
-      const double step = grid.Spacing[axis] / geometry.Stack.PixelSpacing[axis];
-      const double low = std::max(0.0, std::ceil((-0.5 - index[axis]) / step));
-      const double high =
-        std::min(static_cast<double>(grid.Size[axis]) - 1.0,
-                 std::ceil((static_cast<double>(geometry.Stack.Size[axis]) - 0.5 - index[axis]) / step) - 1.0);
-      inside[axis] = high >= low ? static_cast<SizeValueType>(high - low) + 1 : 0;
-    }
-    without += perSlice - inside[0] * inside[1];
+    without += covered ? perSlice - inside[0] * inside[1] : perSlice;
   }
   return without;
 }
