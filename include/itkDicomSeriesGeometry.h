@@ -91,6 +91,16 @@ struct VirtualUnwrapping_EXPORT SliceGap
   unsigned Missing{ 0 };
 };
 
+/** A regular voxel grid in the patient frame. */
+struct VirtualUnwrapping_EXPORT RegularGrid
+{
+  using ImageType = Image<float, 3>;
+  ImageType::PointType     Origin;
+  ImageType::SpacingType   Spacing;
+  ImageType::DirectionType Direction;
+  ImageType::SizeType      Size{ { 0, 0, 0 } };
+};
+
 /** \class DicomSeriesGeometry
  * \brief What the slice positions of a DICOM series say about its geometry, and the
  * regular grid in the patient frame that holds it.
@@ -171,6 +181,20 @@ struct VirtualUnwrapping_EXPORT DicomSeriesGeometry
   /** "about 15 degrees, GantryDetectorTilt 15): slice origins drift ...": the shear. */
   std::string
   DescribeShear(const std::string & gantryTilt) const;
+  /** The largest gap of missing slices, or nullptr. */
+  const SliceGap *
+  LargestGap() const;
+  /** Why the stack is not a regular grid, on one line: the shear, the largest gap, the
+   * spacing runs (whichever apply). gantryTilt: the GantryDetectorTilt value, or "". */
+  std::string
+  DescribeIrregularities(const std::string & gantryTilt) const;
+  /** One warning per finding (shear, spacing change, each gap) and one for what the
+   * resampling onto grid did (its size, spacing, interpolator and NaN voxels). */
+  std::vector<std::string>
+  DescribeCorrections(const std::string &   gantryTilt,
+                      const RegularGrid &   grid,
+                      SliceInterpolatorEnum interpolator,
+                      SizeValueType         voxelsWithoutData) const;
 };
 
 /** Orders stack.Slices along the normal and measures the geometry (see
@@ -180,15 +204,6 @@ struct VirtualUnwrapping_EXPORT DicomSeriesGeometry
 VirtualUnwrapping_EXPORT DicomSeriesGeometry
 AnalyseDicomSliceStack(DicomSliceStack stack, double tolerance);
 
-/** A regular voxel grid in the patient frame. */
-struct VirtualUnwrapping_EXPORT RegularGrid
-{
-  using ImageType = Image<float, 3>;
-  ImageType::PointType     Origin;
-  ImageType::SpacingType   Spacing;
-  ImageType::DirectionType Direction;
-  ImageType::SizeType      Size{ { 0, 0, 0 } };
-};
 
 /** The grid that holds every slice of a stack: axes Row, Column, Normal; in the slice
  * plane the first slice's pixel lattice, extended to the smallest box that holds every

@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "itkCTVolumeReader.h"
 #include "vuCTInputFiles.h"
+#include "vuDicomSeriesScan.h"
 
 #include "itkBinShrinkImageFilter.h"
 #include "itkChangeInformationImageFilter.h"
@@ -29,7 +30,6 @@
 #include "itksys/Glob.hxx"
 
 #include "gdcmDirectory.h"
-#include "gdcmScanner.h"
 
 #include <algorithm>
 #include <cctype>
@@ -42,24 +42,6 @@ namespace itk {
 namespace {
 namespace fs = std::filesystem;
 using namespace detail;
-
-const gdcm::Tag kSeriesUID(0x0020, 0x000e);
-const gdcm::Tag kSeriesNumber(0x0020, 0x0011);
-const gdcm::Tag kSeriesDescription(0x0008, 0x103e);
-const gdcm::Tag kModality(0x0008, 0x0060);
-const gdcm::Tag kPosition(0x0020, 0x0032);
-const gdcm::Tag kOrientation(0x0020, 0x0037);
-const gdcm::Tag kRows(0x0028, 0x0010);
-const gdcm::Tag kColumns(0x0028, 0x0011);
-const gdcm::Tag kPixelSpacing(0x0028, 0x0030);
-const gdcm::Tag kNumberOfFrames(0x0028, 0x0008);
-const gdcm::Tag kRescaleIntercept(0x0028, 0x1052);
-const gdcm::Tag kRescaleSlope(0x0028, 0x1053);
-const gdcm::Tag kBitsAllocated(0x0028, 0x0100);
-const gdcm::Tag kPixelRepresentation(0x0028, 0x0103);
-const gdcm::Tag kGantryTilt(0x0018, 0x1120);
-const gdcm::Tag kFrameIncrementPointer(0x0028, 0x0009);
-const gdcm::Tag kSamplesPerPixel(0x0028, 0x0002);
 
 using OutputImageType = CTVolumeReader::OutputImageType;
 
@@ -75,74 +57,6 @@ Refuse(const TParts &... parts)
   std::replace_if(
     message.begin(), message.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
   throw ExceptionObject(__FILE__, __LINE__, message, "CTVolumeReader");
-}
-
-/** Header facts of one DICOM image file, as found by the GDCM scanner. */
-struct DicomSlice
-{
-  std::string         File;
-  std::vector<double> Position;
-  std::vector<double> Orientation;
-  std::vector<double> PixelSpacing;
-  std::string         Rows;
-  std::string         Columns;
-  unsigned long       Frames{ 1 };
-  double              Slope{ 1.0 };
-  double              Intercept{ 0.0 };
-};
-
-/** The slices of one series as a stack to be measured (DicomSeriesGeometry), or the reason
- * their headers cannot make one volume. */
-std::string
-MakeSliceStack(const std::vector<DicomSlice> & slices, DicomSliceStack & stack)
-{
-  for (const DicomSlice & s : slices)
-  {
-    if (s.Position.size() != 3 || s.Orientation.size() != 6)
-    {
-      return s.File + " has no valid ImagePositionPatient/ImageOrientationPatient: the slices cannot be ordered";
-    }
-  }
-  const DicomSlice & first = slices.front();
-  for (const DicomSlice & s : slices)
-  {
-    if (s.Rows != first.Rows || s.Columns != first.Columns)
-    {
-      return "mixed image sizes in one series: " + first.File + " is " + first.Columns + "x" + first.Rows + ", " +
-             s.File + " is " + s.Columns + "x" + s.Rows;
-    }
-    for (unsigned k = 0; k < 6; ++k)
-    {
-      if (std::abs(s.Orientation[k] - first.Orientation[k]) > 1e-4)
-      {
-        return "mixed orientations in one series: " + first.File + " and " + s.File +
-               " have different ImageOrientationPatient";
-      }
-    }
-    if (s.PixelSpacing.size() != first.PixelSpacing.size() ||
-        (s.PixelSpacing.size() == 2 &&
-         (std::abs(s.PixelSpacing[0] - first.PixelSpacing[0]) > 1e-4 * first.PixelSpacing[0] ||
-          std::abs(s.PixelSpacing[1] - first.PixelSpacing[1]) > 1e-4 * first.PixelSpacing[1])))
-    {
-      return "mixed pixel spacing in one series: " + first.File + " and " + s.File;
-    }
-  }
-  for (unsigned k = 0; k < 3; ++k)
-  {
-    stack.Row[k] = first.Orientation[k];
-    stack.Column[k] = first.Orientation[k + 3];
-  }
-  // DICOM PixelSpacing is (between rows, between columns), that is (y, x).
-  const bool hasSpacing = first.PixelSpacing.size() == 2 && first.PixelSpacing[0] > 0.0 && first.PixelSpacing[1] > 0.0;
-  stack.PixelSpacing[0] = hasSpacing ? first.PixelSpacing[1] : 1.0;
-  stack.PixelSpacing[1] = hasSpacing ? first.PixelSpacing[0] : 1.0;
-  stack.Size[0] = static_cast<SizeValueType>(ParseDecimal(first.Columns, 0.0));
-  stack.Size[1] = static_cast<SizeValueType>(ParseDecimal(first.Rows, 0.0));
-  for (const DicomSlice & s : slices)
-  {
-    stack.Slices.push_back({ s.File, OutputImageType::PointType(s.Position.data()) });
-  }
-  return {};
 }
 
 std::string
@@ -322,86 +236,31 @@ CTVolumeReader::ExamineFiles(const std::vector<std::string> & listed, const std:
 bool
 CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool singleFile)
 {
-  std::vector<std::string> candidates;
-  size_t                   directoryFiles = 0;
-  for (const std::string & f : files)
-  {
-    if (IsDicomDirectoryFile(f))
-    {
-      ++directoryFiles;
-    }
-    else
-    {
-      candidates.push_back(f);
-    }
-  }
-  gdcm::Scanner scanner;
-  for (const gdcm::Tag & tag : { kSeriesUID,
-                                 kSeriesNumber,
-                                 kSeriesDescription,
-                                 kModality,
-                                 kPosition,
-                                 kOrientation,
-                                 kRows,
-                                 kColumns,
-                                 kPixelSpacing,
-                                 kNumberOfFrames,
-                                 kRescaleIntercept,
-                                 kRescaleSlope,
-                                 kBitsAllocated,
-                                 kPixelRepresentation,
-                                 kGantryTilt,
-                                 kFrameIncrementPointer,
-                                 kSamplesPerPixel })
-  {
-    scanner.AddTag(tag);
-  }
-  scanner.Scan(candidates);
-
-  std::map<std::string, std::vector<std::string>> seriesFiles;
-  size_t                                          dicomFiles = directoryFiles;
-  for (const std::string & f : candidates)
-  {
-    if (!scanner.IsKey(f.c_str()))
-    {
-      continue;
-    }
-    ++dicomFiles;
-    if (Trim(scanner.GetValue(f.c_str(), kRows)).empty() || Trim(scanner.GetValue(f.c_str(), kColumns)).empty())
-    {
-      continue;
-    }
-    seriesFiles[Trim(scanner.GetValue(f.c_str(), kSeriesUID))].push_back(f);
-  }
-  if (dicomFiles == 0)
+  DicomScan scan = ScanDicomFiles(files);
+  if (scan.DicomFiles == 0)
   {
     return false;
   }
-  if (seriesFiles.empty())
+  if (scan.Series.empty())
   {
-    throw std::runtime_error(singleFile
-                               ? m_FileName + " is a DICOM file without an image (a DICOMDIR or another "
-                                              "non-image object)"
-                               : m_FileName + " holds " + std::to_string(dicomFiles) + " DICOM file(s) but no image");
+    throw std::runtime_error(singleFile ? m_FileName + " is a DICOM file without an image (a DICOMDIR or another "
+                                                       "non-image object)"
+                                        : m_FileName + " holds " + std::to_string(scan.DicomFiles) +
+                                            " DICOM file(s) but no image");
   }
   m_IsDicom = true;
 
-  auto frameCount = [&](const std::string & f) {
-    const double frames = ParseDecimal(Trim(scanner.GetValue(f.c_str(), kNumberOfFrames)), 1.0);
-    return frames >= 1.0 ? static_cast<SizeValueType>(frames) : SizeValueType{ 1 };
-  };
   std::vector<SeriesInfo> series;
-  for (const auto & entry : seriesFiles)
+  for (const auto & [uid, seriesSlices] : scan.Series)
   {
-    const char * f = entry.second.front().c_str();
-    SeriesInfo   info;
-    info.UID = entry.first;
-    info.Number = Trim(scanner.GetValue(f, kSeriesNumber));
-    info.Description = Trim(scanner.GetValue(f, kSeriesDescription));
-    info.Modality = Trim(scanner.GetValue(f, kModality));
-    for (const std::string & file : entry.second)
+    SeriesInfo info;
+    info.UID = uid;
+    info.Number = seriesSlices.front().SeriesNumber;
+    info.Description = seriesSlices.front().SeriesDescription;
+    info.Modality = seriesSlices.front().Modality;
+    for (const DicomSlice & s : seriesSlices)
     {
-      info.NumberOfSlices += frameCount(file);
+      info.NumberOfSlices += s.Frames;
     }
     series.push_back(info);
   }
@@ -468,33 +327,15 @@ CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool single
     m_Warnings.push_back("read " + DescribeSeries(m_ChosenSeries) + "; other series: " + others);
   }
 
-  const std::vector<std::string> & chosenFiles = seriesFiles[m_ChosenSeries.UID];
-  std::vector<DicomSlice>          slices;
-  for (const std::string & file : chosenFiles)
-  {
-    const char * f = file.c_str();
-    DicomSlice   s;
-    s.File = file;
-    s.Position = ParseDecimals(Trim(scanner.GetValue(f, kPosition)));
-    s.Orientation = ParseDecimals(Trim(scanner.GetValue(f, kOrientation)));
-    s.PixelSpacing = ParseDecimals(Trim(scanner.GetValue(f, kPixelSpacing)));
-    s.Rows = Trim(scanner.GetValue(f, kRows));
-    s.Columns = Trim(scanner.GetValue(f, kColumns));
-    s.Frames = frameCount(file);
-    s.Slope = ParseDecimal(Trim(scanner.GetValue(f, kRescaleSlope)), 1.0);
-    s.Intercept = ParseDecimal(Trim(scanner.GetValue(f, kRescaleIntercept)), 0.0);
-    slices.push_back(s);
-  }
-  const DicomSlice & first = slices.front();
+  const std::vector<DicomSlice> & slices = scan.Series[m_ChosenSeries.UID];
+  const DicomSlice &              first = slices.front();
   m_Modality = m_ChosenSeries.Modality;
   m_RescaleSlope = first.Slope;
   m_RescaleIntercept = first.Intercept;
-  const double bits = ParseDecimal(Trim(scanner.GetValue(first.File.c_str(), kBitsAllocated)), 16.0);
-  const bool   isSigned = Trim(scanner.GetValue(first.File.c_str(), kPixelRepresentation)) == "1";
-  m_PixelType = (isSigned ? "int" : "uint") + std::to_string(static_cast<int>(bits));
-  m_DicomPixelBytes = static_cast<uintmax_t>(
-    ParseDecimal(first.Rows, 0.0) * ParseDecimal(first.Columns, 0.0) * static_cast<double>(first.Frames) *
-    ParseDecimal(Trim(scanner.GetValue(first.File.c_str(), kSamplesPerPixel)), 1.0) * bits / 8.0);
+  m_PixelType = (first.Signed ? "int" : "uint") + std::to_string(static_cast<int>(first.BitsAllocated));
+  m_DicomPixelBytes =
+    static_cast<uintmax_t>(ParseDecimal(first.Rows, 0.0) * ParseDecimal(first.Columns, 0.0) *
+                           static_cast<double>(first.Frames) * first.SamplesPerPixel * first.BitsAllocated / 8.0);
   for (const DicomSlice & s : slices)
   {
     if (s.Slope != first.Slope || s.Intercept != first.Intercept)
@@ -515,15 +356,7 @@ CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool single
                                               "): a single 2D image is not a volume");
     }
     // Frames indexed by Frame Time (Vector) are a cine loop taken in one place, not slices.
-    std::string increment;
-    for (const char c : Trim(scanner.GetValue(first.File.c_str(), kFrameIncrementPointer)))
-    {
-      if (std::isxdigit(static_cast<unsigned char>(c)))
-      {
-        increment += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-      }
-    }
-    if (increment == "00181063" || increment == "00181065")
+    if (first.FrameIncrementPointer == "00181063" || first.FrameIncrementPointer == "00181065")
     {
       throw std::runtime_error(first.File + " holds " + std::to_string(first.Frames) +
                                " frames of a time series (Frame Increment Pointer is Frame Time), not a volume");
@@ -553,7 +386,7 @@ CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool single
   {
     throw std::runtime_error(DescribeSeries(m_ChosenSeries) + ": " + problem);
   }
-  this->ExamineSliceGeometry(std::move(stack), Trim(scanner.GetValue(first.File.c_str(), kGantryTilt)));
+  this->ExamineSliceGeometry(std::move(stack), first.GantryTilt);
   if (first.PixelSpacing.size() != 2)
   {
     m_Warnings.push_back(first.File + " has no PixelSpacing: 1 mm pixels assumed");
@@ -595,79 +428,27 @@ CTVolumeReader::ExamineSliceGeometry(DicomSliceStack stack, const std::string & 
     return;
   }
 
-  // What is wrong with the stack, worst first: the refusal names the first, the warnings
-  // of a resampled stack name them all.
-  const SliceGap * largestGap = nullptr;
-  for (const SliceGap & gap : geometry.Gaps)
-  {
-    largestGap = largestGap == nullptr || gap.Size > largestGap->Size ? &gap : largestGap;
-  }
-  const std::string shear = "sheared slice stack (" + geometry.DescribeShear(gantryTilt);
-  const std::string spacing = "non-uniform slice spacing: " + geometry.DescribeRuns();
   if (!m_ResampleIrregularSeries)
   {
-    std::string refusal = series;
-    if (geometry.Sheared)
-    {
-      refusal += shear + "; resample the series on a regular grid first";
-    }
-    if (largestGap != nullptr)
-    {
-      refusal += (geometry.Sheared ? "; " : "") + geometry.DescribeGap(*largestGap) +
-                 (geometry.Gaps.size() > 1 ? " (" + std::to_string(geometry.Gaps.size()) + " gaps in all)" : "");
-    }
-    if (geometry.HasSpacingChanges() || (!geometry.Sheared && largestGap == nullptr))
-    {
-      refusal += (geometry.Sheared || largestGap != nullptr ? "; " : "") + spacing;
-    }
-    throw std::runtime_error(refusal);
+    throw std::runtime_error(series + geometry.DescribeIrregularities(gantryTilt));
   }
   const size_t acquired = geometry.Stack.Slices.size();
   if (geometry.NumberOfMissingSlices() > acquired)
   {
     // A grid mostly made of gaps would be a volume of NaN with a few slices in it.
-    throw std::runtime_error(series + geometry.DescribeGap(*largestGap) + ": more slices are missing (" +
+    throw std::runtime_error(series + geometry.DescribeGap(*geometry.LargestGap()) + ": more slices are missing (" +
                              std::to_string(geometry.NumberOfMissingSlices()) + ") than were acquired (" +
                              std::to_string(acquired) + "), the series is not resampled");
   }
-
-  const double sliceSpacing = m_ResampledSliceSpacing > 0.0 ? m_ResampledSliceSpacing : geometry.SmallestSpacing();
-  m_ResampledGrid = MakeRegularGrid(geometry, sliceSpacing);
+  m_ResampledGrid =
+    MakeRegularGrid(geometry, m_ResampledSliceSpacing > 0.0 ? m_ResampledSliceSpacing : geometry.SmallestSpacing());
   m_Resampled = true;
   m_VoxelsWithoutData = CountVoxelsWithoutData(geometry, m_ResampledGrid);
-  if (geometry.Sheared)
+  for (const std::string & warning :
+       geometry.DescribeCorrections(gantryTilt, m_ResampledGrid, m_SliceInterpolator, m_VoxelsWithoutData))
   {
-    m_Warnings.push_back(shear + "; corrected: resampled onto a regular grid in the patient frame from the slice "
-                                 "positions");
+    m_Warnings.push_back(warning);
   }
-  std::ostringstream text;
-  text.precision(4);
-  if (geometry.HasSpacingChanges())
-  {
-    text << "uneven slice spacing: " << geometry.DescribeRuns() << "; resampled to " << sliceSpacing << " mm slices";
-    m_Warnings.push_back(text.str());
-  }
-  else if (!geometry.EvenlySpaced && geometry.Gaps.empty())
-  {
-    text << "irregular slice positions: " << geometry.DescribeSlice(geometry.WorstDeviationSlice) << " lies "
-         << geometry.WorstDeviation << " mm from its place on a regular grid; resampled to " << sliceSpacing
-         << " mm slices";
-    m_Warnings.push_back(text.str());
-  }
-  for (const SliceGap & gap : geometry.Gaps)
-  {
-    m_Warnings.push_back(geometry.DescribeGap(gap) + "; the voxels between them are NaN (no data)");
-  }
-  const SizeType &   size = m_ResampledGrid.Size;
-  std::ostringstream summary;
-  summary.precision(4);
-  summary << "resampled " << acquired << " slices onto a regular grid of " << size[0] << " x " << size[1] << " x "
-          << size[2] << " voxels of " << m_ResampledGrid.Spacing[0] << " x " << m_ResampledGrid.Spacing[1] << " x "
-          << m_ResampledGrid.Spacing[2] << " mm (" << ToString(m_SliceInterpolator) << " interpolation); "
-          << m_VoxelsWithoutData << " voxels ("
-          << 100.0 * static_cast<double>(m_VoxelsWithoutData) / static_cast<double>(size[0] * size[1] * size[2])
-          << "%) that no slice covers are NaN";
-  m_Warnings.push_back(summary.str());
 }
 
 void

@@ -362,6 +362,85 @@ DicomSeriesGeometry::DescribeShear(const std::string & gantryTilt) const
          " mm per mm along the normal, mostly along the " + axis + " direction";
 }
 
+const SliceGap *
+DicomSeriesGeometry::LargestGap() const
+{
+  const SliceGap * largest = nullptr;
+  for (const SliceGap & gap : Gaps)
+  {
+    largest = largest == nullptr || gap.Size > largest->Size ? &gap : largest;
+  }
+  return largest;
+}
+
+std::string
+DicomSeriesGeometry::DescribeIrregularities(const std::string & gantryTilt) const
+{
+  std::vector<std::string> parts;
+  if (Sheared)
+  {
+    parts.push_back("sheared slice stack (" + this->DescribeShear(gantryTilt) +
+                    "; resample the series on a regular grid first");
+  }
+  if (const SliceGap * gap = this->LargestGap())
+  {
+    parts.push_back(this->DescribeGap(*gap) +
+                    (Gaps.size() > 1 ? " (" + std::to_string(Gaps.size()) + " gaps in all)" : std::string()));
+  }
+  if (this->HasSpacingChanges() || (!EvenlySpaced && parts.empty()))
+  {
+    parts.push_back("non-uniform slice spacing: " + this->DescribeRuns());
+  }
+  std::string text;
+  for (const std::string & part : parts)
+  {
+    text += (text.empty() ? "" : "; ") + part;
+  }
+  return text;
+}
+
+std::vector<std::string>
+DicomSeriesGeometry::DescribeCorrections(const std::string &   gantryTilt,
+                                         const RegularGrid &   grid,
+                                         SliceInterpolatorEnum interpolator,
+                                         SizeValueType         voxelsWithoutData) const
+{
+  std::vector<std::string> warnings;
+  if (Sheared)
+  {
+    warnings.push_back("sheared slice stack (" + this->DescribeShear(gantryTilt) +
+                       "; corrected: resampled onto a regular grid in the patient frame from the slice positions");
+  }
+  std::ostringstream text;
+  text.precision(4);
+  if (this->HasSpacingChanges())
+  {
+    text << "uneven slice spacing: " << this->DescribeRuns() << "; resampled to " << grid.Spacing[2] << " mm slices";
+    warnings.push_back(text.str());
+  }
+  else if (!EvenlySpaced && Gaps.empty())
+  {
+    text << "irregular slice positions: " << this->DescribeSlice(WorstDeviationSlice) << " lies " << WorstDeviation
+         << " mm from its place on a regular grid; resampled to " << grid.Spacing[2] << " mm slices";
+    warnings.push_back(text.str());
+  }
+  for (const SliceGap & gap : Gaps)
+  {
+    warnings.push_back(this->DescribeGap(gap) + "; the voxels between them are NaN (no data)");
+  }
+  const auto &       size = grid.Size;
+  std::ostringstream summary;
+  summary.precision(4);
+  summary << "resampled " << Stack.Slices.size() << " slices onto a regular grid of " << size[0] << " x " << size[1]
+          << " x " << size[2] << " voxels of " << grid.Spacing[0] << " x " << grid.Spacing[1] << " x "
+          << grid.Spacing[2] << " mm (" << ToString(interpolator) << " interpolation); " << voxelsWithoutData
+          << " voxels ("
+          << 100.0 * static_cast<double>(voxelsWithoutData) / static_cast<double>(size[0] * size[1] * size[2])
+          << "%) that no slice covers are NaN";
+  warnings.push_back(summary.str());
+  return warnings;
+}
+
 DicomSeriesGeometry
 AnalyseDicomSliceStack(DicomSliceStack stack, double tolerance)
 {
