@@ -72,8 +72,9 @@ namespace itk {
  * dcm2niix's tilt correction does), along the normal it runs from the first slice to the
  * last. Each finding and the correction are one warning each (GetWarnings); the
  * measurements are in GetSeriesGeometry(). A series with more missing slices than
- * acquired ones is refused. Without resampling an irregular stack is refused, naming the
- * tilt, the gap and its files, or the spacing runs.
+ * acquired ones is refused. Without resampling an irregular stack is refused, naming on
+ * one line every irregularity found: the tilt, the largest gap and its files, the spacing
+ * runs with their positions.
  *
  * Parameters (all optional):
  * - SeriesIdentifier: SeriesInstanceUID or series number; default "" (most slices).
