@@ -401,7 +401,7 @@ TEST(CTVolumeReader, ShearedStackFromGantryTiltIsRefusedWithoutResampling)
   EXPECT_TRUE(Contains(message, "about 15 degrees")) << message;
 }
 
-// The hospital series of the issue: tilt and spacing change, both named in the refusal.
+// A hospital head CT series: tilt and spacing change, both named in the refusal.
 TEST(CTVolumeReader, TiltAndSpacingChangeAreBothNamedWithoutResampling)
 {
   const std::string directory = TemporaryDirectory();

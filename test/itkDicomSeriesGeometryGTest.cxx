@@ -161,7 +161,7 @@ TEST(DicomSeriesGeometry, ShearIsMeasuredFromThePositions)
 
 TEST(DicomSeriesGeometry, SpacingThatChangesIsTwoRunsNotAGap)
 {
-  // The hospital series: 4 mm, then 7 mm (7 > 1.5 x 4, yet no slice is missing).
+  // A hospital head CT series: 4 mm, then 7 mm (7 > 1.5 x 4, yet no slice is missing).
   std::vector<double> locations = Regular(10, 4.0);
   for (int k = 1; k <= 8; ++k)
   {

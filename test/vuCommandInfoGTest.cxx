@@ -180,7 +180,7 @@ TEST(vuCommandInfo, BadInputGivesOneLineAndNonZeroStatus)
   EXPECT_FALSE(fs::exists(directory + "/out.json"));
 }
 
-// The hospital series of the issue (18.5 degree tilt, 4 then 7 mm): info reads it,
+// A hospital head CT series (18.5 degree tilt, 4 then 7 mm): info reads it,
 // resampled, and says what it found and did, with positions; --no-resample refuses it,
 // naming the tilt and the spacing change; statistics leave out the voxels without data.
 TEST(vuCommandInfo, TiltedUnevenSeriesIsResampledAndExplained)
