@@ -19,6 +19,7 @@
 #define itkCTVolumeReader_h
 
 #include "VirtualUnwrappingExport.h"
+#include "itkDicomSeriesGeometry.h"
 #include "itkImage.h"
 #include "itkImageSource.h"
 
@@ -51,14 +52,29 @@ namespace itk {
  * - a single volume file: NRRD, MetaImage (.mha/.mhd), NIfTI, multi-page TIFF (geometry
  *   from the file, except TIFF which is treated like a stack).
  *
- * Geometry checks of a DICOM series, done on the headers before any pixel is read:
- * mixed image sizes, pixel spacings or orientations; duplicate slice positions; missing
- * slices (a gap of about k times the usual spacing: the gap and its files are named);
- * non-uniform spacing; sheared stacks (gantry or detector tilt: slice origins that drift
- * sideways by more than half a pixel); truncated files among the slices to be read. Each
- * is refused, never returned as a wrongly shaped volume (irregular stacks are not
- * resampled). The volume then takes the checked header geometry: origin of the first
- * slice, PixelSpacing, mean slice spacing, direction (row, column, normal).
+ * Geometry of a DICOM series, measured on the headers before any pixel is read
+ * (itk::DicomSeriesGeometry): mixed image sizes, pixel spacings or orientations, duplicate
+ * slice positions and truncated files among the slices to be read are refused. A regular
+ * stack (every slice within SliceSpacingTolerance of first + i x mean spacing, slice
+ * origins drifting sideways by at most half a pixel) takes the header geometry: origin of
+ * the first slice, PixelSpacing, mean slice spacing, direction (row, column, normal).
+ * An irregular stack, as hospital CT delivers with a tilted gantry and protocols that
+ * change the slice spacing, is resampled by default onto a regular grid in the patient
+ * frame (ResampleIrregularSeries):
+ * - a sheared stack (gantry or detector tilt: slice origins drifting sideways) is
+ *   corrected from the slice positions themselves, GantryDetectorTilt being only reported;
+ * - uneven spacing (runs of different spacing) is equalised to ResampledSliceSpacing;
+ * - missing slices (a gap of more than 1.5 times the spacing around it) are named with
+ *   their positions, and the voxels between the slices around the gap are NaN;
+ * - voxels no slice covers (the corners a sheared stack leaves) are NaN, never invented.
+ * The grid's axes are the slices' row, column and normal; in the slice plane it holds
+ * every slice (the first slice's pixel lattice, widened to the sheared slices, as
+ * dcm2niix's tilt correction does), along the normal it runs from the first slice to the
+ * last. Each finding and the correction are one warning each (GetWarnings); the
+ * measurements are in GetSeriesGeometry(). A series with more missing slices than
+ * acquired ones is refused. Without resampling an irregular stack is refused, naming on
+ * one line every irregularity found: the tilt, the largest gap and its files, the spacing
+ * runs with their positions.
  *
  * Parameters (all optional):
  * - SeriesIdentifier: SeriesInstanceUID or series number; default "" (most slices).
@@ -74,15 +90,24 @@ namespace itk {
  *   region of interest (the spacing grows by the factor), >= 1; default 1.
  * - SliceSpacingTolerance: how far a DICOM slice may lie from its place on the regular
  *   grid (first position + i x mean spacing), as a fraction of the slice spacing, before
- *   the stack is called irregular (headers often round positions to 0.1 mm); (0, 0.5],
- *   default 0.05. Slice origins may drift sideways by at most half a pixel.
+ *   the stack is called irregular (headers often round positions to 0.1 mm); also how
+ *   close two spacings must be to form one run, and how far from an acquired slice a grid
+ *   slice in a gap may lie and still take its values; (0, 0.5], default 0.05.
+ * - ResampleIrregularSeries: resample a sheared or unevenly spaced DICOM series onto a
+ *   regular grid (true, default), or refuse it (false).
+ * - SliceInterpolator: NearestNeighbor, Linear or BSpline (cubic, default), used in the
+ *   slice plane and between the slices around a voxel. Linear interpolation blurs: on the
+ *   standard phantom written with a 15 degree tilt it costs 0.03-0.045 of texture NCC,
+ *   the cubic B-spline 0.01 or less (docs/ct-reading.md).
+ * - ResampledSliceSpacing: slice spacing of the regular grid, mm, >= 0; default 0: the
+ *   smallest slice spacing of the series (the spacing of its most finely spaced run).
  *
  * The output streams: a downstream filter that requests a sub-region (for example a few
  * slices, or StatisticsImageFilter with several stream divisions) makes the reader read
  * only the slices it needs (ImageSeriesReader, ExtractImageFilter), so a stack larger
  * than memory can be cropped or summarised. A region of interest is indexed from 0 and
  * its origin is its first voxel. Progress is reported and AbortGenerateData honoured
- * slice by slice.
+ * slice by slice. A resampled series is read whole (its slices bracket the grid's).
  *
  * References: DICOM PS3.3 C.7.6.2 (Image Plane Module: ImagePositionPatient,
  * ImageOrientationPatient, PixelSpacing) and C.11.1 (Modality LUT: Rescale
@@ -90,8 +115,9 @@ namespace itk {
  *
  * What was read is reported after UpdateOutputInformation(): InputKind, Modality,
  * PixelType (stored component type), RescaleSlope/Intercept, ChosenSeries,
- * AlternativeSeries, Warnings, FullSize (before the region of interest and shrinking) and
- * SliceFileNames (in slice order).
+ * AlternativeSeries, Warnings, FullSize (before the region of interest and shrinking),
+ * SliceFileNames (in slice order), SeriesGeometry (DICOM series), Resampled,
+ * ResampledGrid and VoxelsWithoutData (voxels of the resampled grid that are NaN).
  *
  * \ingroup VirtualUnwrapping
  */
@@ -155,6 +181,14 @@ public:
   itkSetClampMacro(SliceSpacingTolerance, double, 1e-6, 0.5);
   itkGetConstMacro(SliceSpacingTolerance, double);
 
+  itkSetMacro(ResampleIrregularSeries, bool);
+  itkGetConstMacro(ResampleIrregularSeries, bool);
+  itkBooleanMacro(ResampleIrregularSeries);
+  itkSetEnumMacro(SliceInterpolator, SliceInterpolatorEnum);
+  itkGetEnumMacro(SliceInterpolator, SliceInterpolatorEnum);
+  itkSetClampMacro(ResampledSliceSpacing, double, 0.0, NumericTraits<double>::max());
+  itkGetConstMacro(ResampledSliceSpacing, double);
+
   /** "DICOM series", "DICOM multi-frame file", "image stack" or "image file". */
   itkGetStringMacro(InputKind);
   /** DICOM Modality (CT, MR, ...); empty for other formats. */
@@ -164,6 +198,21 @@ public:
   itkGetConstMacro(RescaleSlope, double);
   itkGetConstMacro(RescaleIntercept, double);
   itkGetConstMacro(FullSize, SizeType);
+  /** True when an irregular DICOM series was resampled onto ResampledGrid. */
+  itkGetConstMacro(Resampled, bool);
+  itkGetConstMacro(VoxelsWithoutData, SizeValueType);
+  const RegularGrid &
+  GetResampledGrid() const
+  {
+    return m_ResampledGrid;
+  }
+  /** Slice positions, spacing runs, gaps and shear of the DICOM series read (empty for
+   * other inputs and multi-frame files). */
+  const DicomSeriesGeometry &
+  GetSeriesGeometry() const
+  {
+    return m_SeriesGeometry;
+  }
 
   const SeriesInfo &
   GetChosenSeries() const
@@ -212,6 +261,10 @@ private:
    * be read as a volume. */
   bool
   ExamineDicom(const std::vector<std::string> & files, bool singleFile);
+  /** Measures a DICOM series' slice geometry and chooses: header geometry, resampling, or
+   * refusal. */
+  void
+  ExamineSliceGeometry(DicomSliceStack stack, const std::string & gantryTilt);
   void
   ExamineSliceStack(std::vector<std::string> files);
   void
@@ -222,17 +275,20 @@ private:
   std::string
   FindUnreadableFile() const;
 
-  std::string m_FileName;
-  std::string m_SeriesIdentifier;
-  SpacingType m_SpacingOverride{ 1.0 };
-  bool        m_OverrideSpacing{ false };
-  RegionType  m_RegionOfInterest;
-  bool        m_UseRegionOfInterest{ false };
-  PointType   m_PhysicalRegionOfInterestStart{ 0.0 };
-  PointType   m_PhysicalRegionOfInterestEnd{ 0.0 };
-  bool        m_UsePhysicalRegionOfInterest{ false };
-  unsigned    m_ShrinkFactor{ 1 };
-  double      m_SliceSpacingTolerance{ 0.05 };
+  std::string           m_FileName;
+  std::string           m_SeriesIdentifier;
+  SpacingType           m_SpacingOverride{ 1.0 };
+  bool                  m_OverrideSpacing{ false };
+  RegionType            m_RegionOfInterest;
+  bool                  m_UseRegionOfInterest{ false };
+  PointType             m_PhysicalRegionOfInterestStart{ 0.0 };
+  PointType             m_PhysicalRegionOfInterestEnd{ 0.0 };
+  bool                  m_UsePhysicalRegionOfInterest{ false };
+  unsigned              m_ShrinkFactor{ 1 };
+  double                m_SliceSpacingTolerance{ 0.05 };
+  bool                  m_ResampleIrregularSeries{ true };
+  SliceInterpolatorEnum m_SliceInterpolator{ SliceInterpolatorEnum::BSpline };
+  double                m_ResampledSliceSpacing{ 0.0 };
 
   std::string              m_InputKind;
   std::string              m_Modality;
@@ -244,6 +300,10 @@ private:
   std::vector<SeriesInfo>  m_AlternativeSeries;
   std::vector<std::string> m_Warnings;
   std::vector<std::string> m_SliceFileNames;
+  DicomSeriesGeometry      m_SeriesGeometry;
+  bool                     m_Resampled{ false };
+  RegularGrid              m_ResampledGrid;
+  SizeValueType            m_VoxelsWithoutData{ 0 };
 
   /** The internal pipeline (reader, geometry, region of interest, shrinking), kept alive
    * here because a filter's output holds only a weak reference to its source. */

@@ -24,6 +24,7 @@
 #include "itkObjectFactory.h"
 
 #include <string>
+#include <vector>
 
 namespace itk {
 /** \class CTVolumeWriter
@@ -44,6 +45,26 @@ namespace itk {
  *   the reader (the phantom tool records it in its JSON);
  * - MetaImage (.mha) and Nrrd (.nrrd): FileName is the file; int16 HU, zlib-compressed,
  *   with origin, spacing and direction.
+ *
+ * A DICOM series can be written the way a hospital CT delivers head and spine scans, so
+ * that readers are tested against a known volume:
+ * - GantryTilt (degrees, in (-60, 60), default 0): the slices are acquired in a gantry
+ *   tilted about the row axis. Every slice keeps the input's orientation, and its origin
+ *   moves along the column axis by -tan(GantryTilt) times its distance from the first
+ *   slice along the slice normal (the sheared stack GE scanners write; dcm2niix reads a
+ *   positive GantryDetectorTilt from it); GantryDetectorTilt (0018,1120) holds the angle.
+ *   The slices get rows enough that each holds the whole input (OutsideValue beyond it).
+ * - SliceLocations (mm, default empty: one slice per input slice): where along the input's
+ *   third axis, from its first slice, the slices are taken; increasing, within the input.
+ *   SliceLocationsWithSpacingChange() gives a series whose spacing changes mid-way.
+ * Such slices are sampled from the input by Lanczos-windowed sinc interpolation of radius
+ * 4 (itk::WindowedSincInterpolateImageFunction): the closest ITK comes to sampling the
+ * scanned object itself, and it gives back the input's values at its own voxels;
+ * SliceThickness is then the distance to the next slice, SpacingBetweenSlices is written
+ * only for evenly spaced slices. Both are refused for the other formats.
+ * - OutsideValue (HU, default -1000, air): written where a sheared slice reaches beyond
+ *   the input.
+ *
  * Values are rounded to whole HU and clamped to the range of the stored type. Directories
  * are created when missing. Throws itk::ExceptionObject without an input, file name, or
  * when writing fails.
@@ -88,6 +109,26 @@ public:
   itkGetStringMacro(SeriesDescription);
   itkSetMacro(Seed, uint32_t);
   itkGetConstMacro(Seed, uint32_t);
+  itkSetMacro(GantryTilt, double);
+  itkGetConstMacro(GantryTilt, double);
+  itkSetMacro(OutsideValue, double);
+  itkGetConstMacro(OutsideValue, double);
+  void
+  SetSliceLocations(const std::vector<double> & locations)
+  {
+    m_SliceLocations = locations;
+    this->Modified();
+  }
+  const std::vector<double> &
+  GetSliceLocations() const
+  {
+    return m_SliceLocations;
+  }
+
+  /** Slice locations from 0 to extent (mm): firstSpacing up to half the extent, then
+   * secondSpacing (both > 0); the last slice lies at most one spacing before extent. */
+  static std::vector<double>
+  SliceLocationsWithSpacingChange(double extent, double firstSpacing, double secondSpacing);
 
   void
   Write();
@@ -101,6 +142,10 @@ protected:
 private:
   void
   WriteDicom() const;
+  /** The input sampled on the tilted or relocated slices: a stack holding slice k at
+   * index k, and each slice's origin. */
+  ImageType::Pointer
+  SampleSlices(const std::vector<double> & locations, std::vector<ImageType::PointType> & origins) const;
   void
   WriteTiff() const;
   void
@@ -111,6 +156,9 @@ private:
   FormatType              m_Format{ FormatType::Dicom };
   std::string             m_SeriesDescription{ "VirtualUnwrapping sheet phantom" };
   uint32_t                m_Seed{ 1 };
+  double                  m_GantryTilt{ 0.0 };
+  double                  m_OutsideValue{ -1000.0 };
+  std::vector<double>     m_SliceLocations;
 };
 } // end namespace itk
 

@@ -16,6 +16,8 @@
  *
  *=========================================================================*/
 #include "itkCTVolumeReader.h"
+#include "vuCTInputFiles.h"
+#include "vuDicomSeriesScan.h"
 
 #include "itkBinShrinkImageFilter.h"
 #include "itkChangeInformationImageFilter.h"
@@ -24,14 +26,10 @@
 #include "itkImageFileReader.h"
 #include "itkImageIOFactory.h"
 #include "itkImageSeriesReader.h"
-#include "itkMetaImageIO.h"
 #include "itkProgressAccumulator.h"
 #include "itksys/Glob.hxx"
 
 #include "gdcmDirectory.h"
-#include "gdcmReader.h"
-#include "gdcmScanner.h"
-#include "gdcmTrace.h"
 
 #include <algorithm>
 #include <cctype>
@@ -43,53 +41,9 @@
 namespace itk {
 namespace {
 namespace fs = std::filesystem;
-
-const gdcm::Tag kSeriesUID(0x0020, 0x000e);
-const gdcm::Tag kSeriesNumber(0x0020, 0x0011);
-const gdcm::Tag kSeriesDescription(0x0008, 0x103e);
-const gdcm::Tag kModality(0x0008, 0x0060);
-const gdcm::Tag kPosition(0x0020, 0x0032);
-const gdcm::Tag kOrientation(0x0020, 0x0037);
-const gdcm::Tag kRows(0x0028, 0x0010);
-const gdcm::Tag kColumns(0x0028, 0x0011);
-const gdcm::Tag kPixelSpacing(0x0028, 0x0030);
-const gdcm::Tag kNumberOfFrames(0x0028, 0x0008);
-const gdcm::Tag kRescaleIntercept(0x0028, 0x1052);
-const gdcm::Tag kRescaleSlope(0x0028, 0x1053);
-const gdcm::Tag kBitsAllocated(0x0028, 0x0100);
-const gdcm::Tag kPixelRepresentation(0x0028, 0x0103);
-const gdcm::Tag kGantryTilt(0x0018, 0x1120);
-const gdcm::Tag kFrameIncrementPointer(0x0028, 0x0009);
-const gdcm::Tag kSamplesPerPixel(0x0028, 0x0002);
+using namespace detail;
 
 using OutputImageType = CTVolumeReader::OutputImageType;
-
-/** Turns GDCM's own warnings and errors off while it works for the reader: it reports
- * every odd private tag on standard error, and the reader says itself, in one line, what
- * went wrong. */
-class QuietGdcm
-{
-public:
-  QuietGdcm()
-    : m_Warning(gdcm::Trace::GetWarningFlag())
-    , m_Error(gdcm::Trace::GetErrorFlag())
-  {
-    gdcm::Trace::WarningOff();
-    gdcm::Trace::ErrorOff();
-  }
-  ~QuietGdcm()
-  {
-    gdcm::Trace::SetWarning(m_Warning);
-    gdcm::Trace::SetError(m_Error);
-  }
-  QuietGdcm(const QuietGdcm &) = delete;
-  QuietGdcm &
-  operator=(const QuietGdcm &) = delete;
-
-private:
-  bool m_Warning;
-  bool m_Error;
-};
 
 /** Throws the message alone (no class name or address in the description) on one line,
  * so that the tool can print it as one readable line. */
@@ -103,458 +57,6 @@ Refuse(const TParts &... parts)
   std::replace_if(
     message.begin(), message.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
   throw ExceptionObject(__FILE__, __LINE__, message, "CTVolumeReader");
-}
-
-std::string
-Trim(const char * text)
-{
-  if (text == nullptr)
-  {
-    return {};
-  }
-  std::string s(text);
-  const auto  first = s.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos)
-  {
-    return {};
-  }
-  // DICOM pads odd-length values with a space (text) or a NUL (UIDs).
-  const auto last = s.find_last_not_of(std::string(" \t\r\n\0", 5));
-  return s.substr(first, last - first + 1);
-}
-
-/** Backslash-separated decimal string (DICOM DS multi-value) to numbers; empty when any
- * part does not parse. */
-std::vector<double>
-ParseDecimals(const std::string & text)
-{
-  std::vector<double> values;
-  std::stringstream   stream(text);
-  std::string         part;
-  while (std::getline(stream, part, '\\'))
-  {
-    try
-    {
-      values.push_back(std::stod(part));
-    }
-    catch (const std::exception &)
-    {
-      return {};
-    }
-  }
-  return values;
-}
-
-double
-ParseDecimal(const std::string & text, double fallback)
-{
-  const std::vector<double> values = ParseDecimals(text);
-  return values.size() == 1 && std::isfinite(values[0]) ? values[0] : fallback;
-}
-
-/** Orders file names as a person would: digit runs compare by value, so slice2 comes
- * before slice10 (slice numbers are seldom zero-padded to the same width). */
-bool
-NaturalLess(const std::string & a, const std::string & b)
-{
-  size_t i = 0, j = 0;
-  while (i < a.size() && j < b.size())
-  {
-    if (std::isdigit(static_cast<unsigned char>(a[i])) && std::isdigit(static_cast<unsigned char>(b[j])))
-    {
-      size_t ie = i, je = j;
-      while (ie < a.size() && std::isdigit(static_cast<unsigned char>(a[ie])))
-      {
-        ++ie;
-      }
-      while (je < b.size() && std::isdigit(static_cast<unsigned char>(b[je])))
-      {
-        ++je;
-      }
-      // Compare digit runs by value: strip leading zeros, then longer means larger.
-      size_t iz = i, jz = j;
-      while (iz + 1 < ie && a[iz] == '0')
-      {
-        ++iz;
-      }
-      while (jz + 1 < je && b[jz] == '0')
-      {
-        ++jz;
-      }
-      if (ie - iz != je - jz)
-      {
-        return ie - iz < je - jz;
-      }
-      const int order = a.compare(iz, ie - iz, b, jz, je - jz);
-      if (order != 0)
-      {
-        return order < 0;
-      }
-      i = ie;
-      j = je;
-    }
-    else
-    {
-      if (a[i] != b[j])
-      {
-        return a[i] < b[j];
-      }
-      ++i;
-      ++j;
-    }
-  }
-  return a.size() - i < b.size() - j;
-}
-
-bool
-HasTiffExtension(const fs::path & path)
-{
-  std::string extension = path.extension().string();
-  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) {
-    return static_cast<char>(std::tolower(c));
-  });
-  return extension == ".tif" || extension == ".tiff";
-}
-
-/** Formats ITK reads that are never DICOM (a DICOM file may have any name or none). */
-bool
-HasNonDicomImageExtension(const fs::path & path)
-{
-  std::string name = path.filename().string();
-  std::transform(
-    name.begin(), name.end(), name.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  for (const char * extension : { ".tif",
-                                  ".tiff",
-                                  ".nrrd",
-                                  ".nhdr",
-                                  ".mha",
-                                  ".mhd",
-                                  ".raw",
-                                  ".nii",
-                                  ".nii.gz",
-                                  ".hdr",
-                                  ".img",
-                                  ".png",
-                                  ".jpg",
-                                  ".jpeg",
-                                  ".bmp",
-                                  ".vtk" })
-  {
-    const std::string e(extension);
-    if (name.size() > e.size() && name.compare(name.size() - e.size(), e.size(), e) == 0)
-    {
-      return true;
-    }
-  }
-  return false;
-}
-
-std::string
-ComponentTypeName(IOComponentEnum type, size_t bytes)
-{
-  const std::string bits = std::to_string(8 * bytes);
-  switch (type)
-  {
-    case IOComponentEnum::FLOAT:
-    case IOComponentEnum::DOUBLE:
-    case IOComponentEnum::LDOUBLE:
-      return "float" + bits;
-    case IOComponentEnum::CHAR:
-    case IOComponentEnum::SHORT:
-    case IOComponentEnum::INT:
-    case IOComponentEnum::LONG:
-    case IOComponentEnum::LONGLONG:
-      return "int" + bits;
-    case IOComponentEnum::UNKNOWNCOMPONENTTYPE:
-      return "unknown";
-    default:
-      return "uint" + bits;
-  }
-}
-
-std::string
-SizeText(const ImageIOBase * io)
-{
-  std::ostringstream text;
-  for (unsigned d = 0; d < io->GetNumberOfDimensions(); ++d)
-  {
-    text << (d ? "x" : "") << io->GetDimensions(d);
-  }
-  return text.str();
-}
-
-/** Reads the header of an image file, or says why it cannot. */
-ImageIOBase::Pointer
-ReadImageHeader(const std::string & file)
-{
-  ImageIOBase::Pointer io = ImageIOFactory::CreateImageIO(file.c_str(), ImageIOFactory::IOFileModeEnum::ReadMode);
-  if (io.IsNull())
-  {
-    throw std::runtime_error("cannot read " + file + ": not an image file in a format ITK reads");
-  }
-  io->SetFileName(file);
-  try
-  {
-    io->ReadImageInformation();
-  }
-  catch (const ExceptionObject & e)
-  {
-    throw std::runtime_error("cannot read " + file + ": " + e.GetDescription());
-  }
-  return io;
-}
-
-/** Why a MetaImage cannot hold its voxels, or "": MetaIO reads a short uncompressed data
- * file without failing (it only prints a notice) and leaves the rest of the buffer as it
- * was, so the size of the data file is checked against the header. */
-std::string
-MetaImageTruncation(const std::string & file, ImageIOBase * io)
-{
-  auto * meta = dynamic_cast<MetaImageIO *>(io);
-  if (meta == nullptr || meta->GetMetaImagePointer()->CompressedData())
-  {
-    return {};
-  }
-  const std::string dataName = meta->GetMetaImagePointer()->ElementDataFileName();
-  if (dataName == "LIST" || dataName.find('%') != std::string::npos || dataName.find(' ') != std::string::npos)
-  {
-    return {};
-  }
-  const fs::path  data = dataName == "LOCAL" ? fs::path(file) : fs::path(file).parent_path() / dataName;
-  std::error_code error;
-  const uintmax_t size = fs::file_size(data, error);
-  if (error || size < static_cast<uintmax_t>(io->GetImageSizeInBytes()))
-  {
-    return "cannot read " + file + ": its data file " + data.string() + " holds " + std::to_string(error ? 0 : size) +
-           " bytes, the image needs " + std::to_string(io->GetImageSizeInBytes());
-  }
-  return {};
-}
-
-/** Header facts of one DICOM image file, as found by the GDCM scanner. */
-struct DicomSlice
-{
-  std::string         File;
-  std::vector<double> Position;
-  std::vector<double> Orientation;
-  std::vector<double> PixelSpacing;
-  std::string         Rows;
-  std::string         Columns;
-  unsigned long       Frames{ 1 };
-  double              Slope{ 1.0 };
-  double              Intercept{ 0.0 };
-  double              Location{ 0.0 };
-};
-
-std::string
-FormatMillimetres(double value)
-{
-  std::ostringstream text;
-  text.precision(4);
-  text << value;
-  return text.str();
-}
-
-/** Orders the slices of one series along the slice normal and checks that they form a
- * regular grid. Returns an empty string and the grid's geometry, or the reason the stack
- * is not a grid. */
-std::string
-SortAndCheckSlices(std::vector<DicomSlice> &        slices,
-                   double                           tolerance,
-                   const std::string &              gantryTilt,
-                   OutputImageType::PointType &     origin,
-                   OutputImageType::SpacingType &   spacing,
-                   OutputImageType::DirectionType & direction)
-{
-  for (const DicomSlice & s : slices)
-  {
-    if (s.Position.size() != 3 || s.Orientation.size() != 6)
-    {
-      return s.File + " has no valid ImagePositionPatient/ImageOrientationPatient: the slices cannot be ordered";
-    }
-  }
-  const DicomSlice & first = slices.front();
-  for (const DicomSlice & s : slices)
-  {
-    if (s.Rows != first.Rows || s.Columns != first.Columns)
-    {
-      return "mixed image sizes in one series: " + first.File + " is " + first.Columns + "x" + first.Rows + ", " +
-             s.File + " is " + s.Columns + "x" + s.Rows;
-    }
-    for (unsigned k = 0; k < 6; ++k)
-    {
-      if (std::abs(s.Orientation[k] - first.Orientation[k]) > 1e-4)
-      {
-        return "mixed orientations in one series: " + first.File + " and " + s.File +
-               " have different ImageOrientationPatient";
-      }
-    }
-    if (s.PixelSpacing.size() != first.PixelSpacing.size() ||
-        (s.PixelSpacing.size() == 2 &&
-         (std::abs(s.PixelSpacing[0] - first.PixelSpacing[0]) > 1e-4 * first.PixelSpacing[0] ||
-          std::abs(s.PixelSpacing[1] - first.PixelSpacing[1]) > 1e-4 * first.PixelSpacing[1])))
-    {
-      return "mixed pixel spacing in one series: " + first.File + " and " + s.File;
-    }
-  }
-
-  Vector<double, 3> row, column;
-  for (unsigned k = 0; k < 3; ++k)
-  {
-    row[k] = first.Orientation[k];
-    column[k] = first.Orientation[k + 3];
-  }
-  Vector<double, 3> normal = CrossProduct(row, column);
-  if (normal.GetNorm() < 1e-6)
-  {
-    return first.File + " has a degenerate ImageOrientationPatient";
-  }
-  normal.Normalize();
-  for (DicomSlice & s : slices)
-  {
-    s.Location = s.Position[0] * normal[0] + s.Position[1] * normal[1] + s.Position[2] * normal[2];
-  }
-  std::stable_sort(
-    slices.begin(), slices.end(), [](const DicomSlice & a, const DicomSlice & b) { return a.Location < b.Location; });
-
-  const double pixel = first.PixelSpacing.size() == 2 ? std::min(first.PixelSpacing[0], first.PixelSpacing[1]) : 1.0;
-  std::vector<double> gaps;
-  for (size_t i = 0; i + 1 < slices.size(); ++i)
-  {
-    const double gap = slices[i + 1].Location - slices[i].Location;
-    if (gap <= std::min(1e-3, 0.01 * pixel))
-    {
-      return "duplicate slice position (" + FormatMillimetres(slices[i].Location) + " mm along the normal) in " +
-             slices[i].File + " and " + slices[i + 1].File;
-    }
-    gaps.push_back(gap);
-  }
-
-  // A tilted gantry shifts each slice sideways: the stack is sheared, not a box. Half a
-  // pixel of drift over the whole stack is what still reads as one.
-  double      worstDrift = 0.0, worstAngle = 0.0;
-  std::string worstFile;
-  for (const DicomSlice & s : slices)
-  {
-    Vector<double, 3> offset;
-    for (unsigned k = 0; k < 3; ++k)
-    {
-      offset[k] = s.Position[k] - slices.front().Position[k];
-    }
-    const double along = offset * normal;
-    const double drift = (offset - normal * along).GetNorm();
-    if (drift > 0.5 * pixel && drift > worstDrift)
-    {
-      worstDrift = drift;
-      worstAngle = std::atan2(drift, std::abs(along)) * 180.0 / Math::pi;
-      worstFile = s.File;
-    }
-  }
-  if (worstDrift > 0.0)
-  {
-    return "sheared slice stack (gantry/detector tilt of about " + FormatMillimetres(worstAngle) + " degrees" +
-           (gantryTilt.empty() ? std::string() : ", GantryDetectorTilt " + gantryTilt) +
-           "): slice origins drift sideways by up to " + FormatMillimetres(worstDrift) + " mm (" + worstFile +
-           "); resample the series on a regular grid first";
-  }
-
-  // The volume puts slice i at first + i * spacing: every slice must lie within the
-  // tolerance of that place (positions are often rounded to 0.1 mm in the headers).
-  const double sliceSpacing = (slices.back().Location - slices.front().Location) / static_cast<double>(gaps.size());
-  double       worstDeviation = 0.0;
-  for (size_t i = 0; i < slices.size(); ++i)
-  {
-    worstDeviation = std::max(
-      worstDeviation, std::abs(slices[i].Location - slices.front().Location - static_cast<double>(i) * sliceSpacing));
-  }
-  if (worstDeviation <= tolerance * sliceSpacing)
-  {
-    // DICOM PixelSpacing is (between rows, between columns), that is (y, x).
-    spacing[0] = first.PixelSpacing.size() == 2 ? first.PixelSpacing[1] : 1.0;
-    spacing[1] = first.PixelSpacing.size() == 2 ? first.PixelSpacing[0] : 1.0;
-    spacing[2] = sliceSpacing;
-    for (unsigned k = 0; k < 3; ++k)
-    {
-      origin[k] = slices.front().Position[k];
-      direction[k][0] = row[k];
-      direction[k][1] = column[k];
-      direction[k][2] = normal[k];
-    }
-    return {};
-  }
-  std::vector<double> sorted = gaps;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double usual = sorted[sorted.size() / 2];
-  size_t       worst = 0, irregular = 0;
-  for (size_t i = 0; i < gaps.size(); ++i)
-  {
-    irregular += std::abs(gaps[i] - usual) > tolerance * usual ? 1 : 0;
-    worst = std::abs(gaps[i] - usual) > std::abs(gaps[worst] - usual) ? i : worst;
-  }
-  const double      multiple = std::round(gaps[worst] / usual);
-  const std::string where = " between " + FormatMillimetres(slices[worst].Location) + " mm (" + slices[worst].File +
-                            ") and " + FormatMillimetres(slices[worst + 1].Location) + " mm (" +
-                            slices[worst + 1].File + "), usual spacing " + FormatMillimetres(usual) + " mm";
-  std::string problem;
-  if (multiple >= 2.0 && std::abs(gaps[worst] - multiple * usual) <= tolerance * usual * multiple)
-  {
-    problem = std::to_string(static_cast<long>(multiple) - 1) + " missing slice(s): a gap of " +
-              FormatMillimetres(gaps[worst]) + " mm" + where;
-  }
-  else
-  {
-    problem = "non-uniform slice spacing: " + FormatMillimetres(gaps[worst]) + " mm" + where;
-  }
-  if (irregular > 1)
-  {
-    problem += " (" + std::to_string(irregular) + " irregular gaps in all)";
-  }
-  return problem;
-}
-
-/** True for a DICOMDIR (a media directory, never an image). GDCM's full parse aborts on
- * some malformed DICOMDIR files (an assertion in its fallback reader), so they are told
- * apart from their file meta header alone, before the scanner reads their data set. */
-bool
-IsDicomDirectoryFile(const std::string & file)
-{
-  gdcm::Reader reader;
-  reader.SetFileName(file.c_str());
-  if (!reader.ReadUpToTag(gdcm::Tag(0x0003, 0x0000)))
-  {
-    return false;
-  }
-  return reader.GetFile().GetHeader().GetMediaStorage() == gdcm::MediaStorage::MediaStorageDirectoryStorage;
-}
-
-/** Why a file cannot hold all its pixels, or "": the file must reach past the start of
- * its Pixel Data value by the size of the image. GDCM fills the missing part of a
- * truncated native (uncompressed) file silently, so this is checked from the header.
- * Compressed data has no known size and fails in its decoder instead. */
-std::string
-TruncationProblem(const std::string & file, uintmax_t pixelBytes)
-{
-  gdcm::Reader reader;
-  reader.SetFileName(file.c_str());
-  const gdcm::Tag pixelData(0x7fe0, 0x0010);
-  if (!reader.ReadUpToTag(pixelData, { pixelData }))
-  {
-    return "cannot read the header of " + file;
-  }
-  const gdcm::TransferSyntax syntax = reader.GetFile().GetHeader().GetDataSetTransferSyntax();
-  if (syntax.IsEncapsulated() || syntax == gdcm::TransferSyntax::DeflatedExplicitVRLittleEndian)
-  {
-    return {};
-  }
-  std::error_code error;
-  const uintmax_t size = fs::file_size(file, error);
-  const uintmax_t needed = reader.GetStreamCurrentPosition() + pixelBytes;
-  if (error || size < needed)
-  {
-    return file + " is truncated: its pixel data needs " + std::to_string(needed) + " bytes, the file has " +
-           std::to_string(size);
-  }
-  return {};
 }
 
 std::string
@@ -579,6 +81,10 @@ CTVolumeReader::ResetFacts()
   m_AlternativeSeries.clear();
   m_Warnings.clear();
   m_SliceFileNames.clear();
+  m_SeriesGeometry = DicomSeriesGeometry();
+  m_Resampled = false;
+  m_ResampledGrid = RegularGrid();
+  m_VoxelsWithoutData = 0;
   m_Pipeline.clear();
   m_PipelineOutput = nullptr;
   m_ReplaceGeometry = false;
@@ -730,86 +236,31 @@ CTVolumeReader::ExamineFiles(const std::vector<std::string> & listed, const std:
 bool
 CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool singleFile)
 {
-  std::vector<std::string> candidates;
-  size_t                   directoryFiles = 0;
-  for (const std::string & f : files)
-  {
-    if (IsDicomDirectoryFile(f))
-    {
-      ++directoryFiles;
-    }
-    else
-    {
-      candidates.push_back(f);
-    }
-  }
-  gdcm::Scanner scanner;
-  for (const gdcm::Tag & tag : { kSeriesUID,
-                                 kSeriesNumber,
-                                 kSeriesDescription,
-                                 kModality,
-                                 kPosition,
-                                 kOrientation,
-                                 kRows,
-                                 kColumns,
-                                 kPixelSpacing,
-                                 kNumberOfFrames,
-                                 kRescaleIntercept,
-                                 kRescaleSlope,
-                                 kBitsAllocated,
-                                 kPixelRepresentation,
-                                 kGantryTilt,
-                                 kFrameIncrementPointer,
-                                 kSamplesPerPixel })
-  {
-    scanner.AddTag(tag);
-  }
-  scanner.Scan(candidates);
-
-  std::map<std::string, std::vector<std::string>> seriesFiles;
-  size_t                                          dicomFiles = directoryFiles;
-  for (const std::string & f : candidates)
-  {
-    if (!scanner.IsKey(f.c_str()))
-    {
-      continue;
-    }
-    ++dicomFiles;
-    if (Trim(scanner.GetValue(f.c_str(), kRows)).empty() || Trim(scanner.GetValue(f.c_str(), kColumns)).empty())
-    {
-      continue;
-    }
-    seriesFiles[Trim(scanner.GetValue(f.c_str(), kSeriesUID))].push_back(f);
-  }
-  if (dicomFiles == 0)
+  DicomScan scan = ScanDicomFiles(files);
+  if (scan.DicomFiles == 0)
   {
     return false;
   }
-  if (seriesFiles.empty())
+  if (scan.Series.empty())
   {
-    throw std::runtime_error(singleFile
-                               ? m_FileName + " is a DICOM file without an image (a DICOMDIR or another "
-                                              "non-image object)"
-                               : m_FileName + " holds " + std::to_string(dicomFiles) + " DICOM file(s) but no image");
+    throw std::runtime_error(singleFile ? m_FileName + " is a DICOM file without an image (a DICOMDIR or another "
+                                                       "non-image object)"
+                                        : m_FileName + " holds " + std::to_string(scan.DicomFiles) +
+                                            " DICOM file(s) but no image");
   }
   m_IsDicom = true;
 
-  auto frameCount = [&](const std::string & f) {
-    const double frames = ParseDecimal(Trim(scanner.GetValue(f.c_str(), kNumberOfFrames)), 1.0);
-    return frames >= 1.0 ? static_cast<SizeValueType>(frames) : SizeValueType{ 1 };
-  };
   std::vector<SeriesInfo> series;
-  for (const auto & entry : seriesFiles)
+  for (const auto & [uid, seriesSlices] : scan.Series)
   {
-    const char * f = entry.second.front().c_str();
-    SeriesInfo   info;
-    info.UID = entry.first;
-    info.Number = Trim(scanner.GetValue(f, kSeriesNumber));
-    info.Description = Trim(scanner.GetValue(f, kSeriesDescription));
-    info.Modality = Trim(scanner.GetValue(f, kModality));
-    for (const std::string & file : entry.second)
+    SeriesInfo info;
+    info.UID = uid;
+    info.Number = seriesSlices.front().SeriesNumber;
+    info.Description = seriesSlices.front().SeriesDescription;
+    info.Modality = seriesSlices.front().Modality;
+    for (const DicomSlice & s : seriesSlices)
     {
-      info.NumberOfSlices += frameCount(file);
+      info.NumberOfSlices += s.Frames;
     }
     series.push_back(info);
   }
@@ -876,33 +327,15 @@ CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool single
     m_Warnings.push_back("read " + DescribeSeries(m_ChosenSeries) + "; other series: " + others);
   }
 
-  const std::vector<std::string> & chosenFiles = seriesFiles[m_ChosenSeries.UID];
-  std::vector<DicomSlice>          slices;
-  for (const std::string & file : chosenFiles)
-  {
-    const char * f = file.c_str();
-    DicomSlice   s;
-    s.File = file;
-    s.Position = ParseDecimals(Trim(scanner.GetValue(f, kPosition)));
-    s.Orientation = ParseDecimals(Trim(scanner.GetValue(f, kOrientation)));
-    s.PixelSpacing = ParseDecimals(Trim(scanner.GetValue(f, kPixelSpacing)));
-    s.Rows = Trim(scanner.GetValue(f, kRows));
-    s.Columns = Trim(scanner.GetValue(f, kColumns));
-    s.Frames = frameCount(file);
-    s.Slope = ParseDecimal(Trim(scanner.GetValue(f, kRescaleSlope)), 1.0);
-    s.Intercept = ParseDecimal(Trim(scanner.GetValue(f, kRescaleIntercept)), 0.0);
-    slices.push_back(s);
-  }
-  const DicomSlice & first = slices.front();
+  const std::vector<DicomSlice> & slices = scan.Series[m_ChosenSeries.UID];
+  const DicomSlice &              first = slices.front();
   m_Modality = m_ChosenSeries.Modality;
   m_RescaleSlope = first.Slope;
   m_RescaleIntercept = first.Intercept;
-  const double bits = ParseDecimal(Trim(scanner.GetValue(first.File.c_str(), kBitsAllocated)), 16.0);
-  const bool   isSigned = Trim(scanner.GetValue(first.File.c_str(), kPixelRepresentation)) == "1";
-  m_PixelType = (isSigned ? "int" : "uint") + std::to_string(static_cast<int>(bits));
-  m_DicomPixelBytes = static_cast<uintmax_t>(
-    ParseDecimal(first.Rows, 0.0) * ParseDecimal(first.Columns, 0.0) * static_cast<double>(first.Frames) *
-    ParseDecimal(Trim(scanner.GetValue(first.File.c_str(), kSamplesPerPixel)), 1.0) * bits / 8.0);
+  m_PixelType = (first.Signed ? "int" : "uint") + std::to_string(static_cast<int>(first.BitsAllocated));
+  m_DicomPixelBytes =
+    static_cast<uintmax_t>(ParseDecimal(first.Rows, 0.0) * ParseDecimal(first.Columns, 0.0) *
+                           static_cast<double>(first.Frames) * first.SamplesPerPixel * first.BitsAllocated / 8.0);
   for (const DicomSlice & s : slices)
   {
     if (s.Slope != first.Slope || s.Intercept != first.Intercept)
@@ -923,15 +356,7 @@ CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool single
                                               "): a single 2D image is not a volume");
     }
     // Frames indexed by Frame Time (Vector) are a cine loop taken in one place, not slices.
-    std::string increment;
-    for (const char c : Trim(scanner.GetValue(first.File.c_str(), kFrameIncrementPointer)))
-    {
-      if (std::isxdigit(static_cast<unsigned char>(c)))
-      {
-        increment += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-      }
-    }
-    if (increment == "00181063" || increment == "00181065")
+    if (first.FrameIncrementPointer == "00181063" || first.FrameIncrementPointer == "00181065")
     {
       throw std::runtime_error(first.File + " holds " + std::to_string(first.Frames) +
                                " frames of a time series (Frame Increment Pointer is Frame Time), not a volume");
@@ -955,27 +380,75 @@ CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool single
   }
   // GDCM ignores the position of some image kinds (secondary capture, ...): the checked
   // header geometry is given to the volume explicitly.
-  const std::string problem = SortAndCheckSlices(slices,
-                                                 m_SliceSpacingTolerance,
-                                                 Trim(scanner.GetValue(first.File.c_str(), kGantryTilt)),
-                                                 m_GeometryOrigin,
-                                                 m_GeometrySpacing,
-                                                 m_GeometryDirection);
+  DicomSliceStack   stack;
+  const std::string problem = MakeSliceStack(slices, stack);
   if (!problem.empty())
   {
     throw std::runtime_error(DescribeSeries(m_ChosenSeries) + ": " + problem);
   }
-  m_ReplaceGeometry = true;
+  this->ExamineSliceGeometry(std::move(stack), first.GantryTilt);
   if (first.PixelSpacing.size() != 2)
   {
     m_Warnings.push_back(first.File + " has no PixelSpacing: 1 mm pixels assumed");
   }
   m_InputKind = "DICOM series";
-  for (const DicomSlice & s : slices)
+  return true;
+}
+
+void
+CTVolumeReader::ExamineSliceGeometry(DicomSliceStack stack, const std::string & gantryTilt)
+{
+  try
+  {
+    m_SeriesGeometry = AnalyseDicomSliceStack(std::move(stack), m_SliceSpacingTolerance);
+  }
+  catch (const ExceptionObject & e)
+  {
+    throw std::runtime_error(DescribeSeries(m_ChosenSeries) + ": " + e.GetDescription());
+  }
+  const DicomSeriesGeometry & geometry = m_SeriesGeometry;
+  for (const DicomSliceStack::Slice & s : geometry.Stack.Slices)
   {
     m_SliceFileNames.push_back(s.File);
   }
-  return true;
+  const std::string series = DescribeSeries(m_ChosenSeries) + ": ";
+  if (geometry.IsRegular())
+  {
+    m_ReplaceGeometry = true;
+    m_GeometrySpacing[0] = geometry.Stack.PixelSpacing[0];
+    m_GeometrySpacing[1] = geometry.Stack.PixelSpacing[1];
+    m_GeometrySpacing[2] = geometry.MeanSpacing;
+    m_GeometryOrigin = geometry.Stack.Slices.front().Position;
+    for (unsigned k = 0; k < 3; ++k)
+    {
+      m_GeometryDirection[k][0] = geometry.Stack.Row[k];
+      m_GeometryDirection[k][1] = geometry.Stack.Column[k];
+      m_GeometryDirection[k][2] = geometry.Normal[k];
+    }
+    return;
+  }
+
+  if (!m_ResampleIrregularSeries)
+  {
+    throw std::runtime_error(series + geometry.DescribeIrregularities(gantryTilt));
+  }
+  const size_t acquired = geometry.Stack.Slices.size();
+  if (geometry.NumberOfMissingSlices() > acquired)
+  {
+    // A grid mostly made of gaps would be a volume of NaN with a few slices in it.
+    throw std::runtime_error(series + geometry.DescribeGap(*geometry.LargestGap()) + ": more slices are missing (" +
+                             std::to_string(geometry.NumberOfMissingSlices()) + ") than were acquired (" +
+                             std::to_string(acquired) + "), the series is not resampled");
+  }
+  m_ResampledGrid =
+    MakeRegularGrid(geometry, m_ResampledSliceSpacing > 0.0 ? m_ResampledSliceSpacing : geometry.SmallestSpacing());
+  m_Resampled = true;
+  m_VoxelsWithoutData = CountVoxelsWithoutData(geometry, m_ResampledGrid);
+  for (const std::string & warning :
+       geometry.DescribeCorrections(gantryTilt, m_ResampledGrid, m_SliceInterpolator, m_VoxelsWithoutData))
+  {
+    m_Warnings.push_back(warning);
+  }
 }
 
 void
@@ -1064,6 +537,8 @@ CTVolumeReader::BuildPipeline()
     if (m_IsDicom)
     {
       reader->SetImageIO(GDCMImageIO::New());
+      // The slice geometry was measured from the headers, against SliceSpacingTolerance.
+      reader->SetSpacingWarningRelThreshold(NumericTraits<double>::max());
     }
     // Reading every slice header on the first update would defeat a small region of
     // interest on a stack of thousands of slices.
@@ -1071,6 +546,10 @@ CTVolumeReader::BuildPipeline()
     reader->UseStreamingOn();
     tail = reader->GetOutput();
     m_Pipeline.push_back(reader.GetPointer());
+    if (m_Resampled)
+    {
+      tail = AppendSliceStackResampling(tail, m_SeriesGeometry, m_ResampledGrid, m_SliceInterpolator, m_Pipeline);
+    }
   }
   else
   {
@@ -1175,9 +654,10 @@ CTVolumeReader::BuildPipeline()
       m_Warnings.push_back("physical region of interest clipped to the volume");
     }
   }
-  const bool series = m_SliceFileNames.size() > 1;
+  // A resampled grid slice needs the acquired slices around it: all are read.
+  const bool series = m_SliceFileNames.size() > 1 && !m_Resampled;
   m_FirstSliceToRead = series ? static_cast<size_t>(roi.GetIndex(2)) : 0;
-  m_EndSliceToRead = series ? m_FirstSliceToRead + roi.GetSize(2) : 1;
+  m_EndSliceToRead = series ? m_FirstSliceToRead + roi.GetSize(2) : m_SliceFileNames.size();
   // Only the slices to be read are checked, so that a damaged slice outside the region
   // of interest does not stop the rest of the stack from being read.
   if (m_IsDicom)
@@ -1307,6 +787,9 @@ CTVolumeReader::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "UsePhysicalRegionOfInterest: " << m_UsePhysicalRegionOfInterest << std::endl;
   os << indent << "ShrinkFactor: " << m_ShrinkFactor << std::endl;
   os << indent << "SliceSpacingTolerance: " << m_SliceSpacingTolerance << std::endl;
+  os << indent << "ResampleIrregularSeries: " << m_ResampleIrregularSeries << std::endl;
+  os << indent << "SliceInterpolator: " << ToString(m_SliceInterpolator) << std::endl;
+  os << indent << "ResampledSliceSpacing: " << m_ResampledSliceSpacing << std::endl;
   os << indent << "InputKind: " << m_InputKind << std::endl;
   os << indent << "Modality: " << m_Modality << std::endl;
   os << indent << "PixelType: " << m_PixelType << std::endl;
@@ -1326,6 +809,13 @@ CTVolumeReader::PrintSelf(std::ostream & os, Indent indent) const
     os << indent.GetNextIndent() << w << std::endl;
   }
   os << indent << "SliceFileNames: " << m_SliceFileNames.size() << std::endl;
+  os << indent << "SeriesGeometry: " << m_SeriesGeometry.Locations.size() << " slices"
+     << (m_SeriesGeometry.Sheared ? ", sheared" : "") << ", " << m_SeriesGeometry.Runs.size() << " spacing runs, "
+     << m_SeriesGeometry.Gaps.size() << " gaps" << std::endl;
+  os << indent << "Resampled: " << m_Resampled << std::endl;
+  os << indent << "ResampledGrid: size " << m_ResampledGrid.Size << ", spacing " << m_ResampledGrid.Spacing
+     << ", origin " << m_ResampledGrid.Origin << std::endl;
+  os << indent << "VoxelsWithoutData: " << m_VoxelsWithoutData << std::endl;
   os << indent << "Pipeline: " << m_Pipeline.size() << " internal filters" << std::endl;
   os << indent << "PipelineOutput: " << m_PipelineOutput.GetPointer() << std::endl;
   os << indent << "ReplaceGeometry: " << m_ReplaceGeometry << std::endl;

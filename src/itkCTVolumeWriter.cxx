@@ -23,14 +23,17 @@
 #include "itkImageSeriesWriter.h"
 #include "itkMetaDataObject.h"
 #include "itkMetaImageIO.h"
+#include "itkMultiThreaderBase.h"
 #include "itkNrrdImageIO.h"
 #include "itkRoundImageFilter.h"
 #include "itkShiftScaleImageFilter.h"
 #include "itkTIFFImageIO.h"
+#include "itkWindowedSincInterpolateImageFunction.h"
 
 #include "gdcmUIDGenerator.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -41,6 +44,9 @@
 namespace itk {
 namespace {
 using ImageType = CTVolumeWriter::ImageType;
+
+/** A gantry may tilt up to this many degrees either way (scanners reach about 30). */
+constexpr double kMaximumGantryTilt = 60.0;
 
 // Rounds to whole HU (plus an offset) and clamps to the stored type's range.
 template <typename TPixel>
@@ -112,6 +118,27 @@ CTVolumeWriter::FormatName(FormatType format)
   return "";
 }
 
+std::vector<double>
+CTVolumeWriter::SliceLocationsWithSpacingChange(double extent, double firstSpacing, double secondSpacing)
+{
+  if (!(firstSpacing > 0.0) || !(secondSpacing > 0.0) || !(extent >= 0.0) ||
+      !std::isfinite(extent + firstSpacing + secondSpacing))
+  {
+    itkGenericExceptionMacro(<< "CTVolumeWriter: slice spacings must be positive and the extent finite");
+  }
+  // A margin of a thousandth of a spacing keeps slices that land on the half or the end.
+  std::vector<double> locations;
+  for (double t = 0.0; t <= 0.5 * extent + 1e-3 * firstSpacing; t = locations.back() + firstSpacing)
+  {
+    locations.push_back(t);
+  }
+  for (double t = locations.back() + secondSpacing; t <= extent + 1e-3 * secondSpacing; t += secondSpacing)
+  {
+    locations.push_back(t);
+  }
+  return locations;
+}
+
 void
 CTVolumeWriter::Write()
 {
@@ -126,6 +153,37 @@ CTVolumeWriter::Write()
   if (m_Input->GetBufferedRegion() != m_Input->GetLargestPossibleRegion())
   {
     itkExceptionMacro(<< "the input volume is not fully buffered");
+  }
+  if (!(std::abs(m_GantryTilt) < kMaximumGantryTilt))
+  {
+    itkExceptionMacro(<< "gantry tilt must lie within +-" << kMaximumGantryTilt << " degrees, not " << m_GantryTilt);
+  }
+  if (!std::isfinite(m_OutsideValue))
+  {
+    itkExceptionMacro(<< "the outside value must be finite");
+  }
+  if ((m_GantryTilt != 0.0 || !m_SliceLocations.empty()) && m_Format != FormatType::Dicom)
+  {
+    itkExceptionMacro(<< "a gantry tilt or slice locations need the DICOM format, not " << FormatName(m_Format));
+  }
+  if (!m_SliceLocations.empty())
+  {
+    const double extent =
+      m_Input->GetSpacing()[2] * static_cast<double>(m_Input->GetLargestPossibleRegion().GetSize(2) - 1);
+    const double margin = 1e-6 * m_Input->GetSpacing()[2];
+    for (size_t k = 0; k < m_SliceLocations.size(); ++k)
+    {
+      const double t = m_SliceLocations[k];
+      if (!(t >= -margin && t <= extent + margin) || (k > 0 && !(t > m_SliceLocations[k - 1])))
+      {
+        itkExceptionMacro(<< "slice locations must increase and lie within the input's 0 to " << extent << " mm; slice "
+                          << k << " is at " << t << " mm");
+      }
+    }
+    if (m_SliceLocations.size() < 2)
+    {
+      itkExceptionMacro(<< "a series needs at least two slice locations");
+    }
   }
   switch (m_Format)
   {
@@ -142,12 +200,95 @@ CTVolumeWriter::Write()
   }
 }
 
+ImageType::Pointer
+CTVolumeWriter::SampleSlices(const std::vector<double> & locations, std::vector<ImageType::PointType> & origins) const
+{
+  const auto   size = m_Input->GetLargestPossibleRegion().GetSize();
+  const auto   spacing = m_Input->GetSpacing();
+  const auto & direction = m_Input->GetDirection();
+  // Origins move along the column axis by -tan(tilt) per mm along the normal; the slices
+  // start where the highest one does, and grow by the drift so that each holds the input.
+  const double        slope = -std::tan(m_GantryTilt * Math::pi / 180.0);
+  std::vector<double> shift(locations.size());
+  for (size_t k = 0; k < locations.size(); ++k)
+  {
+    shift[k] = slope * (locations[k] - locations.front());
+  }
+  const auto [lowest, highest] = std::minmax_element(shift.begin(), shift.end());
+  const SizeValueType rows = size[1] + static_cast<SizeValueType>(std::ceil((*highest - *lowest) / spacing[1] - 1e-6));
+  const double        top = *highest;
+
+  auto                slices = ImageType::New();
+  ImageType::SizeType stackSize{ { size[0], rows, locations.size() } };
+  slices->SetRegions(stackSize);
+  slices->Allocate();
+  origins.resize(locations.size());
+  for (size_t k = 0; k < locations.size(); ++k)
+  {
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      origins[k][d] = m_Input->GetOrigin()[d] + direction[d][1] * (shift[k] - top) + direction[d][2] * locations[k];
+    }
+  }
+  slices->SetOrigin(origins.front());
+  slices->SetSpacing(spacing);
+  slices->SetDirection(direction);
+
+  auto interpolator = WindowedSincInterpolateImageFunction<ImageType, 4, Function::LanczosWindowFunction<4>>::New();
+  interpolator->SetInputImage(m_Input);
+  float * buffer = slices->GetBufferPointer();
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    locations.size(),
+    [&](SizeValueType k) {
+      float * out = buffer + k * size[0] * rows;
+      for (SizeValueType j = 0; j < rows; ++j)
+      {
+        for (SizeValueType i = 0; i < size[0]; ++i)
+        {
+          ImageType::PointType p;
+          for (unsigned d = 0; d < 3; ++d)
+          {
+            p[d] = origins[k][d] + direction[d][0] * static_cast<double>(i) * spacing[0] +
+                   direction[d][1] * static_cast<double>(j) * spacing[1];
+          }
+          *out++ = interpolator->IsInsideBuffer(p) ? static_cast<float>(interpolator->Evaluate(p))
+                                                   : static_cast<float>(m_OutsideValue);
+        }
+      }
+    },
+    nullptr);
+  return slices;
+}
+
 void
 CTVolumeWriter::WriteDicom() const
 {
   using StoredType = Image<int16_t, 3>;
+  const auto          inputSize = m_Input->GetLargestPossibleRegion().GetSize();
+  std::vector<double> locations = m_SliceLocations;
+  if (locations.empty())
+  {
+    for (SizeValueType k = 0; k < inputSize[2]; ++k)
+    {
+      locations.push_back(static_cast<double>(k) * m_Input->GetSpacing()[2]);
+    }
+  }
+  std::vector<ImageType::PointType> origins(locations.size());
+  ImageType::ConstPointer           slices = m_Input;
+  if (m_GantryTilt != 0.0 || !m_SliceLocations.empty())
+  {
+    slices = this->SampleSlices(locations, origins);
+  }
+  else
+  {
+    for (SizeValueType k = 0; k < inputSize[2]; ++k)
+    {
+      m_Input->TransformIndexToPhysicalPoint({ { 0, 0, static_cast<IndexValueType>(k) } }, origins[k]);
+    }
+  }
   // GDCMImageIO applies the inverse rescale on write: give it HU, it stores HU + 1024.
-  const auto volume = Quantize<int16_t>(m_Input, 0.0);
+  const auto volume = Quantize<int16_t>(slices, 0.0);
   MakeDirectory(m_FileName);
 
   const auto         size = volume->GetLargestPossibleRegion().GetSize();
@@ -162,6 +303,12 @@ CTVolumeWriter::WriteDicom() const
   const double orientation[6] = { direction[0][0], direction[1][0], direction[2][0],
                                   direction[0][1], direction[1][1], direction[2][1] };
   const double pixelSpacing[2] = { spacing[1], spacing[0] };
+  bool         even = true;
+  for (size_t k = 2; k < locations.size(); ++k)
+  {
+    even = even && std::abs((locations[k] - locations[k - 1]) - (locations[1] - locations[0])) <=
+                     1e-6 * (locations[1] - locations[0]);
+  }
 
   std::vector<MetaDataDictionary> dictionaries(size[2]);
   std::vector<std::string>        names(size[2]);
@@ -171,8 +318,15 @@ CTVolumeWriter::WriteDicom() const
   std::shuffle(order.begin(), order.end(), random);
   for (unsigned k = 0; k < size[2]; ++k)
   {
-    StoredType::PointType position;
-    volume->TransformIndexToPhysicalPoint({ { 0, 0, static_cast<IndexValueType>(k) } }, position);
+    const ImageType::PointType & position = origins[k];
+    const double                 thickness = locations.size() < 2       ? spacing[2]
+                                             : k + 1 < locations.size() ? locations[k + 1] - locations[k]
+                                                                        : locations[k] - locations[k - 1];
+    double                       location = 0.0;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      location += position[d] * direction[d][2];
+    }
     MetaDataDictionary & d = dictionaries[k];
     auto set = [&d](const char * tag, const std::string & value) { EncapsulateMetaData<std::string>(d, tag, value); };
     set("0008|0008", "DERIVED\\SECONDARY\\AXIAL");
@@ -192,11 +346,15 @@ CTVolumeWriter::WriteDicom() const
     set("0020|0013", std::to_string(k + 1));
     set("0020|0032", Join(position.GetDataPointer(), 3));
     set("0020|0037", Join(orientation, 6));
-    set("0020|1041", Join(&position[2], 1));
+    set("0020|1041", Join(&location, 1));
     set("0028|0004", "MONOCHROME2");
     set("0028|0030", Join(pixelSpacing, 2));
-    set("0018|0050", Join(&spacing[2], 1));
-    set("0018|0088", Join(&spacing[2], 1));
+    set("0018|0050", Join(&thickness, 1));
+    if (even)
+    {
+      set("0018|0088", Join(&thickness, 1));
+    }
+    set("0018|1120", Join(&m_GantryTilt, 1));
     set("0028|1052", "-1024");
     set("0028|1053", "1");
     set("0028|1054", "HU");
@@ -269,5 +427,8 @@ CTVolumeWriter::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "Format: " << FormatName(m_Format) << std::endl;
   os << indent << "SeriesDescription: " << m_SeriesDescription << std::endl;
   os << indent << "Seed: " << m_Seed << std::endl;
+  os << indent << "GantryTilt: " << m_GantryTilt << std::endl;
+  os << indent << "OutsideValue: " << m_OutsideValue << std::endl;
+  os << indent << "SliceLocations: " << m_SliceLocations.size() << std::endl;
 }
 } // end namespace itk

@@ -179,3 +179,48 @@ TEST(vuCommandInfo, BadInputGivesOneLineAndNonZeroStatus)
   EXPECT_NE(failed.Status, 0);
   EXPECT_FALSE(fs::exists(directory + "/out.json"));
 }
+
+// A hospital head CT series (18.5 degree tilt, 4 then 7 mm): info reads it,
+// resampled, and says what it found and did, with positions; --no-resample refuses it,
+// naming the tilt and the spacing change; statistics leave out the voxels without data.
+TEST(vuCommandInfo, TiltedUnevenSeriesIsResampledAndExplained)
+{
+  const std::string directory = WorkDirectory();
+  const std::string series = std::string(VU_TEST_DATA_DIR) + "/dicom/tilted_ct/gantry18_4to7";
+  const ToolRun     run = Info("'" + series + "' --stats", directory);
+  ASSERT_EQ(run.Status, 0) << run.Err;
+  EXPECT_TRUE(run.Err.empty()) << run.Err;
+  const nlohmann::json json = nlohmann::json::parse(run.Out);
+  EXPECT_EQ(json["size"], nlohmann::json({ 64, 78, 38 }));
+  const nlohmann::json & corrections = json["geometry_corrections"];
+  EXPECT_TRUE(corrections["sheared"].get<bool>());
+  EXPECT_NEAR(corrections["tilt_deg"].get<double>(), 18.5, 1e-3);
+  ASSERT_EQ(corrections["spacing_runs"].size(), 2u);
+  EXPECT_NEAR(corrections["spacing_runs"][1]["spacing_mm"].get<double>(), 7.0, 1e-3);
+  EXPECT_NEAR(corrections["spacing_runs"][1]["from"]["location_mm"].get<double>(), 748.21, 1e-3);
+  EXPECT_EQ(corrections["resampled"]["interpolator"], "bspline");
+  const auto without = corrections["resampled"]["voxels_without_data"].get<long>();
+  EXPECT_GT(without, 0);
+  EXPECT_EQ(json["stats"]["voxels_without_data"].get<long>(), without);
+  EXPECT_TRUE(json["stats"]["mean"].is_number());
+  ASSERT_EQ(json["warnings"].size(), 3u);
+  EXPECT_NE(json["warnings"][0].get<std::string>().find("sheared slice stack"), std::string::npos);
+  EXPECT_NE(json["warnings"][1].get<std::string>().find("uneven slice spacing: 4 mm from 696.2 mm"), std::string::npos);
+
+  ExpectOneLineError(Info("'" + series + "' --no-resample", directory), "non-uniform slice spacing: 4 mm from");
+  ExpectOneLineError(Info("'" + series + "' --no-resample", directory), "sheared slice stack");
+  // Option values are checked by the command-line parser, which says so in its own words.
+  const ToolRun unknown = Info("'" + series + "' --interpolator cubic", directory);
+  EXPECT_NE(unknown.Status, 0);
+  EXPECT_NE(unknown.Err.find("--interpolator: cubic not in {nearest,linear,bspline}"), std::string::npos)
+    << unknown.Err;
+}
+
+// A regular series has nothing to correct.
+TEST(vuCommandInfo, RegularSeriesHasNoGeometryCorrections)
+{
+  const std::string directory = WorkDirectory();
+  const ToolRun     run = Info("'" + kPhilips + "'", directory);
+  ASSERT_EQ(run.Status, 0) << run.Err;
+  EXPECT_TRUE(nlohmann::json::parse(run.Out)["geometry_corrections"].is_null());
+}

@@ -19,8 +19,9 @@
 #include "vuCommands.h"
 #include "vuReaderOptions.h"
 
+#include "itkBinaryThresholdImageFilter.h"
 #include "itkCTVolumeReader.h"
-#include "itkStatisticsImageFilter.h"
+#include "itkLabelStatisticsImageFilter.h"
 
 namespace vu {
 namespace {
@@ -83,18 +84,30 @@ RegisterInfoCommand(CLI::App & app)
     }
     json["rescale"] = { { "slope", reader->GetRescaleSlope() }, { "intercept", reader->GetRescaleIntercept() } };
     json["warnings"] = reader->GetWarnings();
+    json["geometry_corrections"] = GeometryCorrectionsJson(*reader);
 
     if (stats)
     {
       // One slice per stream division: the whole volume never has to fit in memory.
-      using StatisticsType = itk::StatisticsImageFilter<itk::CTVolumeReader::OutputImageType>;
-      auto statistics = StatisticsType::New();
+      // Voxels without data (NaN in a resampled series) are counted, not summed.
+      using ImageType = itk::CTVolumeReader::OutputImageType;
+      using LabelType = itk::Image<unsigned char, 3>;
+      auto hasData = itk::BinaryThresholdImageFilter<ImageType, LabelType>::New();
+      hasData->SetInput(reader->GetOutput());
+      hasData->SetLowerThreshold(itk::NumericTraits<float>::NonpositiveMin());
+      hasData->SetUpperThreshold(itk::NumericTraits<float>::max());
+      hasData->SetInsideValue(1);
+      hasData->SetOutsideValue(0);
+      auto statistics = itk::LabelStatisticsImageFilter<ImageType, LabelType>::New();
       statistics->SetInput(reader->GetOutput());
+      statistics->SetLabelInput(hasData->GetOutput());
       statistics->SetNumberOfStreamDivisions(static_cast<unsigned>(size[2]));
       statistics->Update();
-      json["stats"] = { { "min", statistics->GetMinimum() },
-                        { "max", statistics->GetMaximum() },
-                        { "mean", statistics->GetMean() } };
+      const bool any = statistics->HasLabel(1);
+      json["stats"] = { { "min", any ? nlohmann::json(statistics->GetMinimum(1)) : nlohmann::json() },
+                        { "max", any ? nlohmann::json(statistics->GetMaximum(1)) : nlohmann::json() },
+                        { "mean", any ? nlohmann::json(statistics->GetMean(1)) : nlohmann::json() },
+                        { "voxels_without_data", statistics->HasLabel(0) ? statistics->GetCount(0) : 0 } };
     }
     EmitJson(json, outputPath);
   });

@@ -31,6 +31,7 @@
 #include "itkSheetPhantomSource.h"
 #include "itkShiftScaleImageFilter.h"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <map>
@@ -45,6 +46,8 @@ struct PhantomOptions
   std::string Preset, Output, Format{ "dicom" }, Shape, Text, Font, InkImage;
   bool        Force{ false };
   double      MeshSpacing{ 0.0 };
+  // Slices of the written DICOM series left out (indices in slice order).
+  std::vector<unsigned> DropSlices;
   // Numeric overrides of the preset, by option name; applied only when given.
   std::map<std::string, double> Values;
 };
@@ -131,10 +134,11 @@ RunPhantom(const PhantomOptions & options)
   const auto has = [&](const char * name) { return options.Values.count(name) > 0; };
   const auto value = [&](const char * name) { return options.Values.at(name); };
   for (const char * name :
-       { "length",         "width",       "thickness",    "inner-radius",   "pitch",        "squash",
-         "wave-amplitude", "fold-radius", "fold-opening", "tilt",           "glyph-height", "ink-contrast",
-         "ink-depth",      "air",         "sheet",        "fibre-contrast", "fibre-length", "voxel-size",
-         "slice-spacing",  "margin",      "blur-fwhm",    "noise",          "turns" })
+       { "length",         "width",          "thickness",   "inner-radius",  "pitch",
+         "squash",         "wave-amplitude", "fold-radius", "fold-opening",  "tilt",
+         "glyph-height",   "ink-contrast",   "ink-depth",   "air",           "sheet",
+         "fibre-contrast", "fibre-length",   "voxel-size",  "slice-spacing", "margin",
+         "blur-fwhm",      "noise",          "turns",       "gantry-tilt",   "second-slice-spacing" })
   {
     if (has(name) && !std::isfinite(value(name)))
     {
@@ -239,6 +243,20 @@ RunPhantom(const PhantomOptions & options)
     reader->Update();
     source->SetInkPattern(reader->GetOutput());
   }
+  if ((has("gantry-tilt") || has("second-slice-spacing") || !options.DropSlices.empty()) &&
+      format != itk::CTVolumeWriter::FormatType::Dicom)
+  {
+    throw UsageError(
+      "--gantry-tilt, --second-slice-spacing and --drop-slices write a DICOM series: use --format dicom");
+  }
+  if (has("gantry-tilt") && !(std::abs(value("gantry-tilt")) < 60.0))
+  {
+    throw UsageError("--gantry-tilt must lie between -60 and 60 degrees");
+  }
+  if (has("second-slice-spacing") && !(value("second-slice-spacing") > 0.0))
+  {
+    throw UsageError("--second-slice-spacing must be positive");
+  }
   if (options.MeshSpacing < 0.0 || !std::isfinite(options.MeshSpacing))
   {
     throw UsageError("--mesh-spacing must be positive");
@@ -285,6 +303,42 @@ RunPhantom(const PhantomOptions & options)
   writer->SetFileName((temporary.Path / volumeName).string());
   writer->SetSeed(source->GetSeed());
   writer->SetSeriesDescription("VirtualUnwrapping phantom " + options.Preset);
+  // A hospital CT series: tilted gantry, spacing that changes, slices left out.
+  const bool          hospital = has("gantry-tilt") || has("second-slice-spacing") || !options.DropSlices.empty();
+  std::vector<double> sliceLocations;
+  if (hospital)
+  {
+    const auto   volumeSize = volume->GetLargestPossibleRegion().GetSize();
+    const double sliceSpacing = volume->GetSpacing()[2];
+    const double extent = sliceSpacing * static_cast<double>(volumeSize[2] - 1);
+    if (has("second-slice-spacing"))
+    {
+      sliceLocations =
+        itk::CTVolumeWriter::SliceLocationsWithSpacingChange(extent, sliceSpacing, value("second-slice-spacing"));
+    }
+    else
+    {
+      for (size_t k = 0; k < volumeSize[2]; ++k)
+      {
+        sliceLocations.push_back(static_cast<double>(k) * sliceSpacing);
+      }
+    }
+    std::vector<unsigned> drop = options.DropSlices;
+    std::sort(drop.begin(), drop.end());
+    drop.erase(std::unique(drop.begin(), drop.end()), drop.end());
+    for (auto k = drop.rbegin(); k != drop.rend(); ++k)
+    {
+      if (*k == 0 || *k + 1 >= sliceLocations.size())
+      {
+        throw UsageError("--drop-slices: slice " + std::to_string(*k) +
+                         " is not between the first and the last (0 and " + std::to_string(sliceLocations.size() - 1) +
+                         ")");
+      }
+      sliceLocations.erase(sliceLocations.begin() + *k);
+    }
+    writer->SetGantryTilt(has("gantry-tilt") ? value("gantry-tilt") : 0.0);
+    writer->SetSliceLocations(sliceLocations);
+  }
   writer->Write();
 
   WriteInkPng(geometry.GetInkImage(), (temporary.Path / "ground_truth_ink.png").string());
@@ -373,6 +427,17 @@ RunPhantom(const PhantomOptions & options)
                      { "origin_mm", Vector3(origin.GetDataPointer()) },
                      { "direction", direction },
                      { "values", stored } };
+  if (hospital)
+  {
+    json["series"] = { { "description",
+                         "the DICOM series is sampled from the volume above (cubic B-spline) on tilted or relocated "
+                         "slices: slice k lies at slice_locations_mm[k] along the volume's z axis from its first "
+                         "slice, its origin moved along y by -tan(gantry_tilt_deg) times that distance (then the "
+                         "slices are widened to hold the whole volume)" },
+                       { "gantry_tilt_deg", writer->GetGantryTilt() },
+                       { "slice_locations_mm", sliceLocations },
+                       { "dropped_slices", options.DropSlices } };
+  }
   json["mapping"] = {
     { "description",
       "Sheet coordinates: s = arc length from the inner end (0..length_mm), w = across the sheet along the roll "
@@ -472,7 +537,15 @@ RegisterPhantomCommand(CLI::App & app)
     { "blur-fwhm", "full width at half maximum of the scanner's blur, mm (0: none)" },
     { "noise", "standard deviation of the noise, HU (0: none)" },
     { "seed", "random seed of noise, fibres and file order" },
+    { "gantry-tilt",
+      "write the DICOM series as a CT with its gantry tilted by this many degrees: slice origins shifted along y, "
+      "GantryDetectorTilt set (-60, 60)" },
+    { "second-slice-spacing",
+      "write the second half of the DICOM series' slices this many mm apart (the first half keeps --slice-spacing)" },
   };
+  command->add_option("--drop-slices",
+                      options.DropSlices,
+                      "leave these slices (indices in slice order, not the first or last) out of the DICOM series");
   for (const auto & [name, help] : numbers)
   {
     const std::string key = name;

@@ -424,6 +424,16 @@ RunUnwrap(UnwrapOptions & options)
   {
     warnings.push_back("read: " + w);
   }
+  // Segmentation and meshing need a value in every voxel; the texture samples the scan as
+  // read, so a sheet that crosses voxels without data shows holes (NaN) there.
+  const FilledVolume filled = FillVoxelsWithoutData(volume);
+  if (filled.Filled > 0)
+  {
+    std::ostringstream text;
+    text << filled.Filled << " voxels without data (NaN) taken as " << filled.Value
+         << " (the median of the scan) for segmentation, meshing and the preview; the texture samples them as NaN";
+    warnings.push_back("read: " + text.str());
+  }
   const auto size = volume->GetLargestPossibleRegion().GetSize();
   const auto spacing = volume->GetSpacing();
   report["input"] = { { "path", options.Input },
@@ -434,13 +444,14 @@ RunUnwrap(UnwrapOptions & options)
                       { "spacing_mm", { spacing[0], spacing[1], spacing[2] } },
                       { "origin_mm", { volume->GetOrigin()[0], volume->GetOrigin()[1], volume->GetOrigin()[2] } },
                       { "rescale",
-                        { { "slope", reader->GetRescaleSlope() }, { "intercept", reader->GetRescaleIntercept() } } } };
+                        { { "slope", reader->GetRescaleSlope() }, { "intercept", reader->GetRescaleIntercept() } } },
+                      { "geometry_corrections", GeometryCorrectionsJson(*reader) } };
   endStage("read");
 
   // 2. Segment.
   progress.Start("segment", "segmenting the sheet");
   auto segmentation = itk::SheetSegmentationImageFilter<VolumeType, MaskType>::New();
-  segmentation->SetInput(volume);
+  segmentation->SetInput(filled.Volume);
   segmentation->SetAutomaticThreshold(automaticThreshold);
   segmentation->SetThreshold(threshold);
   progress.Observe(segmentation);
@@ -451,7 +462,7 @@ RunUnwrap(UnwrapOptions & options)
   progress.Start("mesh", "meshing the sheet's mid-surface");
   auto surfaceFilter = itk::SheetMidSurfaceMeshFilter<MaskType, MeshType>::New();
   surfaceFilter->SetInput(segmentation->GetOutput());
-  surfaceFilter->SetIntensityImage(volume);
+  surfaceFilter->SetIntensityImage(filled.Volume);
   surfaceFilter->SetMethod(itk::SheetSurfaceMethodFromString(options.Method));
   surfaceFilter->SetSpacingAlongSheet(options.MeshSpacing);
   surfaceFilter->SetSpacingAlongAxis(options.MeshSpacing);
@@ -659,7 +670,7 @@ RunUnwrap(UnwrapOptions & options)
       uv[2 * i + 1] = (flat.Points[3 * i + 1] - (tOrigin[1] - 0.5 * pixelSize)) / height;
     }
     WriteSheetMeshObj((staging / "flat.obj").string(), flat, uv, "texture.png");
-    WritePreview(volume, surface, texture8, staging / "preview.png");
+    WritePreview(filled.Volume, surface, texture8, staging / "preview.png");
   }
   catch (...)
   {

@@ -19,6 +19,9 @@
 
 #include "vuCommands.h"
 
+#include "itkImageDuplicator.h"
+
+#include <algorithm>
 #include <cmath>
 
 namespace vu {
@@ -52,9 +55,24 @@ AddReaderOptions(CLI::App & command, ReaderOptions & options)
     .add_option("--slice-tolerance",
                 options.SliceSpacingTolerance,
                 "how far a DICOM slice may lie from its place on the regular grid, as a fraction of the slice "
-                "spacing, before the series is refused as irregular")
+                "spacing, before the series is called irregular (and resampled)")
     ->check(CLI::Range(1e-6, 0.5))
     ->capture_default_str();
+  command.add_flag("--no-resample",
+                   options.NoResample,
+                   "refuse a sheared (gantry tilt) or unevenly spaced DICOM series instead of resampling it onto a "
+                   "regular grid");
+  command
+    .add_option("--interpolator",
+                options.Interpolator,
+                "interpolation of a resampled DICOM series: nearest, linear or bspline (cubic)")
+    ->check(CLI::IsMember({ "nearest", "linear", "bspline" }))
+    ->capture_default_str();
+  command
+    .add_option("--resample-spacing",
+                options.ResampleSpacing,
+                "slice spacing in mm of a resampled DICOM series (default: its smallest slice spacing)")
+    ->check(CLI::PositiveNumber);
 }
 
 void
@@ -109,5 +127,89 @@ ConfigureReader(const ReaderOptions & options, const std::string & path, itk::CT
   }
   reader.SetShrinkFactor(options.Shrink);
   reader.SetSliceSpacingTolerance(options.SliceSpacingTolerance);
+  reader.SetResampleIrregularSeries(!options.NoResample);
+  reader.SetSliceInterpolator(itk::SliceInterpolatorFromString(options.Interpolator));
+  reader.SetResampledSliceSpacing(options.ResampleSpacing);
+}
+
+nlohmann::json
+GeometryCorrectionsJson(const itk::CTVolumeReader & reader)
+{
+  const itk::DicomSeriesGeometry & geometry = reader.GetSeriesGeometry();
+  if (!reader.GetResampled())
+  {
+    return nullptr;
+  }
+  auto slice = [&geometry](size_t k) {
+    const double base = geometry.Stack.Slices.front().Position.GetVectorFromOrigin() * geometry.Normal;
+    return nlohmann::json{ { "file", geometry.Stack.Slices[k].File }, { "location_mm", base + geometry.Locations[k] } };
+  };
+  nlohmann::json json;
+  json["sheared"] = geometry.Sheared;
+  json["tilt_deg"] = geometry.TiltDegrees;
+  json["drift_mm_per_mm"] = { geometry.DriftPerMillimetre[0], geometry.DriftPerMillimetre[1] };
+  json["maximum_drift_mm"] = geometry.MaximumDrift;
+  json["spacing_runs"] = nlohmann::json::array();
+  for (const auto & run : geometry.Runs)
+  {
+    json["spacing_runs"].push_back(
+      { { "spacing_mm", run.Spacing }, { "from", slice(run.First) }, { "to", slice(run.Last) } });
+  }
+  json["gaps"] = nlohmann::json::array();
+  for (const auto & gap : geometry.Gaps)
+  {
+    json["gaps"].push_back({ { "missing_slices", gap.Missing },
+                             { "gap_mm", gap.Size },
+                             { "usual_spacing_mm", gap.UsualSpacing },
+                             { "after", slice(gap.Before) },
+                             { "before", slice(gap.Before + 1) } });
+  }
+  const itk::RegularGrid & grid = reader.GetResampledGrid();
+  json["resampled"] = { { "size", { grid.Size[0], grid.Size[1], grid.Size[2] } },
+                        { "spacing_mm", { grid.Spacing[0], grid.Spacing[1], grid.Spacing[2] } },
+                        { "origin_mm", { grid.Origin[0], grid.Origin[1], grid.Origin[2] } },
+                        { "interpolator", itk::ToString(reader.GetSliceInterpolator()) },
+                        { "voxels_without_data", reader.GetVoxelsWithoutData() },
+                        { "value_without_data", "NaN" } };
+  return json;
+}
+
+FilledVolume
+FillVoxelsWithoutData(itk::CTVolumeReader::OutputImageType * volume)
+{
+  FilledVolume result;
+  result.Volume = volume;
+  const float * values = volume->GetBufferPointer();
+  const size_t  count = volume->GetBufferedRegion().GetNumberOfPixels();
+  result.Filled =
+    static_cast<itk::SizeValueType>(std::count_if(values, values + count, [](float v) { return !std::isfinite(v); }));
+  if (result.Filled == 0 || result.Filled == count)
+  {
+    return result;
+  }
+  // The median of about a million voxels with data, evenly spread.
+  const size_t       stride = std::max<size_t>(1, count / 1000000);
+  std::vector<float> sample;
+  for (size_t i = 0; i < count; i += stride)
+  {
+    if (std::isfinite(values[i]))
+    {
+      sample.push_back(values[i]);
+    }
+  }
+  if (sample.empty())
+  {
+    sample.push_back(*std::find_if(values, values + count, [](float v) { return std::isfinite(v); }));
+  }
+  std::nth_element(sample.begin(), sample.begin() + sample.size() / 2, sample.end());
+  result.Value = sample[sample.size() / 2];
+  auto duplicator = itk::ImageDuplicator<itk::CTVolumeReader::OutputImageType>::New();
+  duplicator->SetInputImage(volume);
+  duplicator->Update();
+  result.Volume = duplicator->GetOutput();
+  float * filled = result.Volume->GetBufferPointer();
+  std::replace_if(
+    filled, filled + count, [](float v) { return !std::isfinite(v); }, static_cast<float>(result.Value));
+  return result;
 }
 } // namespace vu

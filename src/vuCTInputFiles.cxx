@@ -1,0 +1,290 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "vuCTInputFiles.h"
+
+#include "itkImageIOFactory.h"
+#include "itkMetaImageIO.h"
+
+#include "gdcmReader.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <sstream>
+
+namespace itk {
+namespace detail {
+namespace fs = std::filesystem;
+
+
+std::string
+Trim(const char * text)
+{
+  if (text == nullptr)
+  {
+    return {};
+  }
+  std::string s(text);
+  const auto  first = s.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos)
+  {
+    return {};
+  }
+  // DICOM pads odd-length values with a space (text) or a NUL (UIDs).
+  const auto last = s.find_last_not_of(std::string(" \t\r\n\0", 5));
+  return s.substr(first, last - first + 1);
+}
+
+std::vector<double>
+ParseDecimals(const std::string & text)
+{
+  std::vector<double> values;
+  std::stringstream   stream(text);
+  std::string         part;
+  while (std::getline(stream, part, '\\'))
+  {
+    try
+    {
+      values.push_back(std::stod(part));
+    }
+    catch (const std::exception &)
+    {
+      return {};
+    }
+  }
+  return values;
+}
+
+double
+ParseDecimal(const std::string & text, double fallback)
+{
+  const std::vector<double> values = ParseDecimals(text);
+  return values.size() == 1 && std::isfinite(values[0]) ? values[0] : fallback;
+}
+
+bool
+NaturalLess(const std::string & a, const std::string & b)
+{
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size())
+  {
+    if (std::isdigit(static_cast<unsigned char>(a[i])) && std::isdigit(static_cast<unsigned char>(b[j])))
+    {
+      size_t ie = i, je = j;
+      while (ie < a.size() && std::isdigit(static_cast<unsigned char>(a[ie])))
+      {
+        ++ie;
+      }
+      while (je < b.size() && std::isdigit(static_cast<unsigned char>(b[je])))
+      {
+        ++je;
+      }
+      // Compare digit runs by value: strip leading zeros, then longer means larger.
+      size_t iz = i, jz = j;
+      while (iz + 1 < ie && a[iz] == '0')
+      {
+        ++iz;
+      }
+      while (jz + 1 < je && b[jz] == '0')
+      {
+        ++jz;
+      }
+      if (ie - iz != je - jz)
+      {
+        return ie - iz < je - jz;
+      }
+      const int order = a.compare(iz, ie - iz, b, jz, je - jz);
+      if (order != 0)
+      {
+        return order < 0;
+      }
+      i = ie;
+      j = je;
+    }
+    else
+    {
+      if (a[i] != b[j])
+      {
+        return a[i] < b[j];
+      }
+      ++i;
+      ++j;
+    }
+  }
+  return a.size() - i < b.size() - j;
+}
+
+bool
+HasTiffExtension(const fs::path & path)
+{
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) {
+    return static_cast<char>(std::tolower(c));
+  });
+  return extension == ".tif" || extension == ".tiff";
+}
+
+bool
+HasNonDicomImageExtension(const fs::path & path)
+{
+  std::string name = path.filename().string();
+  std::transform(
+    name.begin(), name.end(), name.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  for (const char * extension : { ".tif",
+                                  ".tiff",
+                                  ".nrrd",
+                                  ".nhdr",
+                                  ".mha",
+                                  ".mhd",
+                                  ".raw",
+                                  ".nii",
+                                  ".nii.gz",
+                                  ".hdr",
+                                  ".img",
+                                  ".png",
+                                  ".jpg",
+                                  ".jpeg",
+                                  ".bmp",
+                                  ".vtk" })
+  {
+    const std::string e(extension);
+    if (name.size() > e.size() && name.compare(name.size() - e.size(), e.size(), e) == 0)
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
+std::string
+ComponentTypeName(IOComponentEnum type, size_t bytes)
+{
+  const std::string bits = std::to_string(8 * bytes);
+  switch (type)
+  {
+    case IOComponentEnum::FLOAT:
+    case IOComponentEnum::DOUBLE:
+    case IOComponentEnum::LDOUBLE:
+      return "float" + bits;
+    case IOComponentEnum::CHAR:
+    case IOComponentEnum::SHORT:
+    case IOComponentEnum::INT:
+    case IOComponentEnum::LONG:
+    case IOComponentEnum::LONGLONG:
+      return "int" + bits;
+    case IOComponentEnum::UNKNOWNCOMPONENTTYPE:
+      return "unknown";
+    default:
+      return "uint" + bits;
+  }
+}
+
+std::string
+SizeText(const ImageIOBase * io)
+{
+  std::ostringstream text;
+  for (unsigned d = 0; d < io->GetNumberOfDimensions(); ++d)
+  {
+    text << (d ? "x" : "") << io->GetDimensions(d);
+  }
+  return text.str();
+}
+
+ImageIOBase::Pointer
+ReadImageHeader(const std::string & file)
+{
+  ImageIOBase::Pointer io = ImageIOFactory::CreateImageIO(file.c_str(), ImageIOFactory::IOFileModeEnum::ReadMode);
+  if (io.IsNull())
+  {
+    throw std::runtime_error("cannot read " + file + ": not an image file in a format ITK reads");
+  }
+  io->SetFileName(file);
+  try
+  {
+    io->ReadImageInformation();
+  }
+  catch (const ExceptionObject & e)
+  {
+    throw std::runtime_error("cannot read " + file + ": " + e.GetDescription());
+  }
+  return io;
+}
+
+std::string
+MetaImageTruncation(const std::string & file, ImageIOBase * io)
+{
+  auto * meta = dynamic_cast<MetaImageIO *>(io);
+  if (meta == nullptr || meta->GetMetaImagePointer()->CompressedData())
+  {
+    return {};
+  }
+  const std::string dataName = meta->GetMetaImagePointer()->ElementDataFileName();
+  if (dataName == "LIST" || dataName.find('%') != std::string::npos || dataName.find(' ') != std::string::npos)
+  {
+    return {};
+  }
+  const fs::path  data = dataName == "LOCAL" ? fs::path(file) : fs::path(file).parent_path() / dataName;
+  std::error_code error;
+  const uintmax_t size = fs::file_size(data, error);
+  if (error || size < static_cast<uintmax_t>(io->GetImageSizeInBytes()))
+  {
+    return "cannot read " + file + ": its data file " + data.string() + " holds " + std::to_string(error ? 0 : size) +
+           " bytes, the image needs " + std::to_string(io->GetImageSizeInBytes());
+  }
+  return {};
+}
+
+bool
+IsDicomDirectoryFile(const std::string & file)
+{
+  gdcm::Reader reader;
+  reader.SetFileName(file.c_str());
+  if (!reader.ReadUpToTag(gdcm::Tag(0x0003, 0x0000)))
+  {
+    return false;
+  }
+  return reader.GetFile().GetHeader().GetMediaStorage() == gdcm::MediaStorage::MediaStorageDirectoryStorage;
+}
+
+std::string
+TruncationProblem(const std::string & file, uintmax_t pixelBytes)
+{
+  gdcm::Reader reader;
+  reader.SetFileName(file.c_str());
+  const gdcm::Tag pixelData(0x7fe0, 0x0010);
+  if (!reader.ReadUpToTag(pixelData, { pixelData }))
+  {
+    return "cannot read the header of " + file;
+  }
+  const gdcm::TransferSyntax syntax = reader.GetFile().GetHeader().GetDataSetTransferSyntax();
+  if (syntax.IsEncapsulated() || syntax == gdcm::TransferSyntax::DeflatedExplicitVRLittleEndian)
+  {
+    return {};
+  }
+  std::error_code error;
+  const uintmax_t size = fs::file_size(file, error);
+  const uintmax_t needed = reader.GetStreamCurrentPosition() + pixelBytes;
+  if (error || size < needed)
+  {
+    return file + " is truncated: its pixel data needs " + std::to_string(needed) + " bytes, the file has " +
+           std::to_string(size);
+  }
+  return {};
+}
+} // namespace detail
+} // namespace itk
