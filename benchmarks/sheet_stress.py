@@ -1040,6 +1040,7 @@ class TruthSurface:
     """Truth samples of one scan for scoring (volume voxel coordinates)."""
 
     def __init__(self, roll, dims, max_samples=3_000_000):
+        self.roll = roll
         area = roll.area()
         self.h = max(0.25, math.sqrt(area / max_samples))
         self.samples = roll.samples(self.h)
@@ -1053,6 +1054,11 @@ class TruthSurface:
         if len(self.coverage_points) > 2_000_000:
             pick = stream(roll.p["seed"], "coverage").choice(len(self.coverage_points), 2_000_000, replace=False)
             self.coverage_points = self.coverage_points[pick]
+
+    def end_arcs(self, w):
+        """True arc lengths of the inner and outer end at axial positions w."""
+        p0, p1 = self.roll.end_angles(np.asarray(w, dtype=np.float64))
+        return np.interp(p0, self.roll.phi, self.roll.s), np.interp(p1, self.roll.phi, self.roll.s)
 
     def project(self, pts):
         """Distance of points to the true mid-surface, and their arc length s."""
@@ -1084,11 +1090,17 @@ def score_mesh(truth_surface, verts, faces):
     length = np.linalg.norm(verts[edges[:, 0]] - verts[edges[:, 1]], axis=1)
     jumps = np.abs(s[edges[:, 0]] - s[edges[:, 1]]) > 2.0 * length + 4.0
     edge_len = float(np.median(length))
+    # Jump edges with a vertex within 1.5 mesh spacings of a true end of the sheet (or beyond
+    # it): the end of the trace overshooting onto the neighbouring turn.
+    s0, s1 = truth_surface.end_arcs(truth_surface.last_w)
+    near_end = (s - s0 < 1.5 * edge_len) | (s1 - s < 1.5 * edge_len)
+    at_ends = jumps & (near_end[edges[:, 0]] | near_end[edges[:, 1]])
     h = max(0.5, math.sqrt(max(mesh_area(verts, faces), 1.0) / 1_000_000))
     near = mesh_to_surface_distance(verts, faces, truth_surface.coverage_points, h)
     coverage = float(np.mean(near <= 1.0)) if len(near) else 0.0
     return {"mesh_error_mean": float(dist.mean()), "mesh_error_p95": float(np.percentile(dist, 95)),
-            "mesh_error_max": float(dist.max()), "jumps": int(jumps.sum()), "coverage": coverage,
+            "mesh_error_max": float(dist.max()), "jumps": int(jumps.sum()), "jumps_at_ends": int(at_ends.sum()),
+            "coverage": coverage,
             "vertices": int(len(verts)), "triangles": int(len(faces)), "median_edge": edge_len,
             "turns_touched": int(len(np.unique(turn))), "_jump_edges": edges[jumps],
             "_projected": {"distance": dist, "s": s, "w": truth_surface.last_w}}
@@ -1238,9 +1250,10 @@ def overlay_png(path, volume, truth_surface, verts, faces, jump_edges, title, sl
 
 PARAMETER_KEYS = [k for k in draw_parameters(0) if k != "seed"] + ["turns_drawn"]
 FACTOR_KEYS = ["tilt_deg", "artefact", "coarse_voxels"]
-MEASURED_KEYS = ["gap_min", "gap_median", "snr_measured", "sheet_length", "outer_radius", "dimensions",
+MEASURED_KEYS = ["tilt_reach", "gap_min", "gap_median", "snr_measured", "sheet_length", "outer_radius", "dimensions",
                  "fov_cut_voxels", "text", "text_fits_fov"]
 FIGURE_KEYS = ["success", "legible", "legible_text", "mesh_error_mean", "mesh_error_p95", "mesh_error_max", "jumps",
+               "jumps_at_ends",
                "coverage", "cer", "cer_text", "ocr_variant", "ocr_text", "ocr_text_region", "ocr_box", "vertices",
                "triangles", "median_edge", "turns_touched"]
 TOOL_KEYS = ["tool_exit", "tool_error", "crash", "score_error", "method", "threshold", "grid", "sheet_thickness_mm",
@@ -1276,6 +1289,10 @@ def truth_row(truth):
                 "dimensions": "x".join(str(d) for d in truth["volume"]["dimensions"]),
                 "fov_cut_voxels": truth["volume"]["fov_cut_voxels"], "text": " / ".join(truth["lines"]),
                 "text_fits_fov": truth["ink"]["text_fits_fov"]})
+    # How far the tilt carries the roll's cross-section along the slice normal, against its
+    # width: above about 0.5 most slices cut the roll partly.
+    row["tilt_reach"] = round(2.0 * m["outer_radius"] * math.sin(math.radians(truth["factors"]["tilt_deg"]))
+                              / truth["parameters"]["width"], 4)
     return row
 
 
@@ -1489,6 +1506,9 @@ FACTORS = [
     ("irregularity (Fourier amplitude)", "irregularity", _bins([(0, 0.033), (0.033, 0.067), (0.067, 0.101)])),
     ("squash (axes ratio)", "squash", _bins([(0.6, 0.73), (0.73, 0.87), (0.87, 1.01)])),
     ("tilt (degrees)", "tilt_deg", _bins([(0, 5), (5, 10), (10, 22)])),
+    ("tilt reach: diameter x sin(tilt) / width", "tilt_reach", _bins([(0, 0.25), (0.25, 0.45), (0.45, 10)])),
+    ("winding direction (in the slices)", "clockwise", [("counter-clockwise", lambda x: str(x) == "False"),
+                                                        ("clockwise", lambda x: str(x) == "True")]),
     ("FOV cut", "fov_cut_voxels", [("none", lambda x: _num(x) == 0), ("cut", lambda x: _num(x) > 0)]),
     ("artefact type", "artefact", None),
     ("blur sigma (voxels)", "blur", _bins([(0.4, 0.67), (0.67, 0.94), (0.94, 1.21)])),
