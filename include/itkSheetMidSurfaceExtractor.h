@@ -63,6 +63,11 @@ struct VirtualUnwrapping_EXPORT SheetVolumeView
   const float *   Intensity{ nullptr };
   size_t          Size[3]{ 0, 0, 0 };
   double          Spacing[3]{ 1.0, 1.0, 1.0 };
+  /** True when the roll axis is known to run along the slice normal (for example estimated
+   * from the whole volume and resampled along): the axis is then a line of constant (x, y)
+   * through the slices' centroids, not the centroids' least-squares line, which a sheet
+   * whose ends or radius change along the axis tilts. */
+  bool AxisAlongSlices{ false };
 };
 
 /** Parameters of SheetMidSurfaceExtractor (mm). */

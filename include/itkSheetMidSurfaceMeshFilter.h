@@ -37,7 +37,11 @@ namespace itk {
  * The mask's face-connected components are labelled; the largest is meshed (one sheet =
  * one connected mesh) and, when there are several, a warning says so. Only the bounding
  * box of that component (plus two voxels) is read. The roll axis is estimated as the
- * least-squares line through the slices' centroids of the sheet; when it is tilted from
+ * direction of least gradient energy over the sheet (the smallest eigenvector of the
+ * structure tensor of the lightly smoothed intensities, or of the mask), since a rolled
+ * sheet does not change along its axis; for a sheet without such a direction (flat or
+ * gently curved: two small eigenvalues) as the least-squares line through the slices'
+ * centroids of the sheet. When the axis is tilted from
  * the slice normal (third image axis) by more than AxisTiltTolerance degrees, or the
  * in-plane voxels are not square, the box is resampled (itk::ResampleImageFilter: nearest
  * neighbour for the mask, linear for the intensities) onto a grid whose third axis is the
@@ -152,8 +156,12 @@ private:
   using SheetImageType = Image<uint8_t, 3>;
   using AxisType = Vector<double, 3>;
   static AxisType
-  EstimateRollAxis(const SheetImageType * sheetMask);
-  void
+  EstimateRollAxis(const SheetImageType * sheetMask, const IntensityImageType * sheetIntensity, bool & fromTensor);
+  static AxisType
+  EstimateRollAxisFromCentroids(const SheetImageType * sheetMask);
+  /** Returns true when the axis came from the structure tensor (so the slices now cut
+   * straight across it). */
+  bool
   AlignWithRollAxis(typename SheetImageType::Pointer &     sheetMask,
                     typename IntensityImageType::Pointer & sheetIntensity,
                     std::vector<std::string> &             warnings) const;

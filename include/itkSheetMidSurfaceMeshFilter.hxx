@@ -31,6 +31,7 @@
 #include <sstream>
 
 #include "vnl/algo/vnl_determinant.h"
+#include "vnl/algo/vnl_symmetric_eigensystem.h"
 
 namespace itk {
 template <typename TMaskImage, typename TOutputMesh>
@@ -154,7 +155,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
       }
     }
   }
-  this->AlignWithRollAxis(sheetMask, sheetIntensity, warnings);
+  const bool axisKnown = this->AlignWithRollAxis(sheetMask, sheetIntensity, warnings);
   if (sheetIntensity)
   {
     this->Denoise(sheetMask, sheetIntensity, warnings);
@@ -163,6 +164,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   SheetVolumeView view;
   view.Mask = sheetMask->GetBufferPointer();
   view.Intensity = sheetIntensity ? sheetIntensity->GetBufferPointer() : nullptr;
+  view.AxisAlongSlices = axisKnown;
   for (unsigned d = 0; d < 3; ++d)
   {
     view.Size[d] = sheetMask->GetBufferedRegion().GetSize()[d];
@@ -212,7 +214,122 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
 
 template <typename TMaskImage, typename TOutputMesh>
 auto
-SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxis(const SheetImageType * sheetMask) -> AxisType
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxis(const SheetImageType *     sheetMask,
+                                                                     const IntensityImageType * sheetIntensity,
+                                                                     bool &                     fromTensor)
+  -> AxisType
+{
+  // The sheet does not change along the roll axis: its normals all lie across it, so the
+  // axis is the direction of least gradient energy over the sheet (the structure tensor's
+  // smallest eigenvector), taken from the lightly smoothed intensities (the mask where
+  // there are none). Isotropic noise adds to every eigenvalue alike and moves no
+  // eigenvector; the roll's edges add energy along the axis only. A flat or gently curved
+  // sheet has two small eigenvalues and no such axis: then the centroids' line decides.
+  using FloatImageType = Image<float, 3>;
+  typename FloatImageType::Pointer source;
+  if (sheetIntensity != nullptr)
+  {
+    source = const_cast<FloatImageType *>(static_cast<const FloatImageType *>(sheetIntensity));
+  }
+  else
+  {
+    source = FloatImageType::New();
+    source->CopyInformation(sheetMask);
+    source->SetRegions(sheetMask->GetBufferedRegion());
+    source->Allocate();
+    const size_t count = sheetMask->GetBufferedRegion().GetNumberOfPixels();
+    for (size_t i = 0; i < count; ++i)
+    {
+      source->GetBufferPointer()[i] = sheetMask->GetBufferPointer()[i] != 0 ? 1.0f : 0.0f;
+    }
+  }
+  auto smoothing = SmoothingRecursiveGaussianImageFilter<FloatImageType, FloatImageType>::New();
+  smoothing->SetInput(source);
+  typename SmoothingRecursiveGaussianImageFilter<FloatImageType, FloatImageType>::SigmaArrayType sigmas;
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    sigmas[d] = sheetMask->GetSpacing()[d];
+  }
+  smoothing->SetSigmaArray(sigmas);
+  smoothing->Update();
+  const float *   smooth = smoothing->GetOutput()->GetBufferPointer();
+  const uint8_t * mask = sheetMask->GetBufferPointer();
+  const auto      size = sheetMask->GetBufferedRegion().GetSize();
+  const auto &    spacing = sheetMask->GetSpacing();
+  const auto &    direction = sheetMask->GetDirection();
+  const size_t    strides[3] = { 1, size[0], size[0] * size[1] };
+  double          tensor[3][3] = { { 0.0 } };
+  size_t          offset = 0;
+  for (size_t k = 0; k < size[2]; ++k)
+  {
+    for (size_t j = 0; j < size[1]; ++j)
+    {
+      for (size_t i = 0; i < size[0]; ++i, ++offset)
+      {
+        if (mask[offset] == 0)
+        {
+          continue;
+        }
+        const size_t index[3] = { i, j, k };
+        double       gradient[3];
+        for (unsigned d = 0; d < 3; ++d)
+        {
+          const size_t below = index[d] > 0 ? offset - strides[d] : offset;
+          const size_t above = index[d] + 1 < size[d] ? offset + strides[d] : offset;
+          const double steps = static_cast<double>(above - below) / static_cast<double>(strides[d]);
+          gradient[d] = steps > 0.0 ? (smooth[above] - smooth[below]) / (steps * spacing[d]) : 0.0;
+        }
+        double physical[3];
+        for (unsigned r = 0; r < 3; ++r)
+        {
+          physical[r] = direction[r][0] * gradient[0] + direction[r][1] * gradient[1] + direction[r][2] * gradient[2];
+        }
+        for (unsigned r = 0; r < 3; ++r)
+        {
+          for (unsigned c = 0; c < 3; ++c)
+          {
+            tensor[r][c] += physical[r] * physical[c];
+          }
+        }
+      }
+    }
+  }
+  vnl_matrix<double> matrix(3, 3);
+  for (unsigned r = 0; r < 3; ++r)
+  {
+    for (unsigned c = 0; c < 3; ++c)
+    {
+      matrix(r, c) = tensor[r][c];
+    }
+  }
+  const vnl_symmetric_eigensystem<double> eigen(matrix);
+  // Eigenvalues ascending. A roll spreads its normals evenly across the axis: the two
+  // large eigenvalues are comparable and far above the axis's.
+  constexpr double rolledEigenvalueRatio = 2.5;
+  constexpr double largestTilt = 45.0;
+  if (eigen.get_eigenvalue(1) > rolledEigenvalueRatio * std::max(eigen.get_eigenvalue(0), 0.0) &&
+      eigen.get_eigenvalue(1) > 0.0)
+  {
+    AxisType axis;
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      axis[r] = eigen.get_eigenvector(0)[r];
+    }
+    const double cosine = axis[0] * direction[0][2] + axis[1] * direction[1][2] + axis[2] * direction[2][2];
+    if (std::abs(cosine) >= std::cos(largestTilt * Math::pi / 180.0))
+    {
+      fromTensor = true;
+      return cosine < 0.0 ? AxisType(-axis) : axis;
+    }
+  }
+  fromTensor = false;
+  return EstimateRollAxisFromCentroids(sheetMask);
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+auto
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxisFromCentroids(const SheetImageType * sheetMask)
+  -> AxisType
 {
   // Least-squares line i(k), j(k) through the centroids of the middle 60 % of the slices
   // with material: slices near the ends of a tilted roll cut it partly, which biases them.
@@ -276,7 +393,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxis(const Sheet
 }
 
 template <typename TMaskImage, typename TOutputMesh>
-void
+bool
 SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AlignWithRollAxis(
   typename SheetImageType::Pointer &     sheetMask,
   typename IntensityImageType::Pointer & sheetIntensity,
@@ -301,14 +418,16 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AlignWithRollAxis(
     return normal;
   };
   const AxisType originalNormal = sliceNormal(originalMask);
-  AxisType       axis = EstimateRollAxis(originalMask);
+  bool           fromTensor = false;
+  AxisType       axis = EstimateRollAxis(originalMask, originalIntensity, fromTensor);
   if (angle(axis, originalNormal) <= m_AxisTiltTolerance && square)
   {
-    return;
+    return fromTensor;
   }
-  // Each pass resamples the original box along the current estimate; the estimate from a
-  // better aligned grid is better (partial slices bias it less), so it converges in a few.
-  for (int pass = 0; pass < 4; ++pass)
+  // Each pass resamples the original box along the current estimate. The structure tensor's
+  // estimate is global and needs one; the centroids' is better from a better aligned grid
+  // (partial slices bias it less), so it converges in a few.
+  for (int pass = 0; pass < (fromTensor ? 1 : 4); ++pass)
   {
     AxisType firstAxis;
     for (unsigned r = 0; r < 3; ++r)
@@ -383,7 +502,11 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AlignWithRollAxis(
       resampler->Update();
       sheetIntensity = resampler->GetOutput();
     }
-    const AxisType refined = EstimateRollAxis(sheetMask);
+    if (fromTensor)
+    {
+      break;
+    }
+    const AxisType refined = EstimateRollAxisFromCentroids(sheetMask);
     if (angle(refined, sliceNormal(sheetMask)) <= 0.25 * m_AxisTiltTolerance)
     {
       break;
@@ -401,6 +524,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AlignWithRollAxis(
     text << " to square in-plane voxels of " << inPlane;
   }
   warnings.push_back(text.str());
+  return fromTensor;
 }
 
 template <typename TMaskImage, typename TOutputMesh>

@@ -568,7 +568,7 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
       szy += weight * z * centroidY[k];
     }
     const double denominator = sw * szz - sz1 * sz1;
-    if (denominator > 1e-12 * sw * sw)
+    if (!volume.AxisAlongSlices && denominator > 1e-12 * sw * sw)
     {
       m_Report.AxisSlope[0] = (sw * szx - sz1 * sxw) / denominator;
       m_Report.AxisSlope[1] = (sw * szy - sz1 * syw) / denominator;

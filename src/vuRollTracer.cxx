@@ -926,7 +926,8 @@ TraceRoll(const SheetVolumeView &             volume,
     growth.push_back(seedTrace.At(m + tracer.Frame().Rays) - seedTrace.At(m));
   }
   result.Rolled =
-    turns >= 1.0 && result.Explained >= 0.6 && Median(growth) >= std::max(settings.Voxel, 0.5 * tracer.Width());
+    turns >= 1.0 && result.Explained >= 0.6 &&
+    std::abs(Median(growth)) >= std::max(settings.Voxel, 0.5 * tracer.Width());
   progress(0.1);
 
   // Every slice, outwards from the seed, with the previous slice's trace as prior. The
