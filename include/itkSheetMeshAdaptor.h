@@ -64,6 +64,14 @@ MeshToSheetMesh(const TMesh * mesh)
   std::vector<std::pair<typename TMesh::PointIdentifier, uint32_t>> idMap;
   idMap.reserve(numberOfPoints);
   uint32_t next = 0;
+  if (mesh->GetPoints() == nullptr || mesh->GetNumberOfPoints() == 0)
+  {
+    itkGenericExceptionMacro(<< "MeshToSheetMesh: the mesh has no points");
+  }
+  if (mesh->GetCells() == nullptr || mesh->GetNumberOfCells() == 0)
+  {
+    itkGenericExceptionMacro(<< "MeshToSheetMesh: the mesh has no triangles");
+  }
   for (auto it = mesh->GetPoints()->Begin(); it != mesh->GetPoints()->End(); ++it, ++next)
   {
     for (unsigned d = 0; d < 3; ++d)

@@ -50,7 +50,8 @@ namespace itk {
  * Outputs: the mask; GetNumberOfComponents() (components kept, largest first) and
  * GetLargestComponentSize() (voxels).
  *
- * Errors (itk::ExceptionObject, one line): an empty or constant volume, nothing at or
+ * Errors (itk::ExceptionObject, one line): an empty or constant volume, one with no finite
+ * voxel (all NaN; NaN voxels are otherwise ignored) or with infinite values, nothing at or
  * above the threshold, no component of at least MinimumComponentSize voxels.
  *
  * Reference: N. Otsu, "A threshold selection method from gray-level histograms", IEEE

@@ -28,6 +28,8 @@
 #include "itkProgressAccumulator.h"
 #include "itkRegionOfInterestImageFilter.h"
 #include "itkRelabelComponentImageFilter.h"
+
+#include <cmath>
 #include "itkSheetMidSurfaceExtractor.h"
 #include "itkSheetSegmentationImageFilter.h"
 #include "itkSmoothingRecursiveGaussianImageFilter.h"
@@ -120,6 +122,17 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
   range->Compute();
   const double minimum = static_cast<double>(range->GetMinimum());
   const double maximum = static_cast<double>(range->GetMaximum());
+  if (minimum > maximum)
+  {
+    // The calculator skips NaN: nothing was left to compare.
+    itkExceptionMacro(<< "the volume has no finite voxel (all "
+                      << input->GetLargestPossibleRegion().GetNumberOfPixels() << " are NaN): nothing to segment");
+  }
+  if (std::isinf(minimum) || std::isinf(maximum))
+  {
+    itkExceptionMacro(<< "the volume holds infinite values (range " << minimum << " to " << maximum
+                      << "): nothing to segment");
+  }
   if (!(maximum > minimum))
   {
     itkExceptionMacro(<< "the volume is constant (" << minimum << "): nothing to segment");

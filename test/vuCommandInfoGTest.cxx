@@ -28,6 +28,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <sys/wait.h>
 
@@ -63,17 +64,23 @@ WorkDirectory()
 }
 
 ToolRun
-Info(const std::string & arguments, const std::string & directory)
+Tool(const std::string & subcommandAndArguments, const std::string & directory)
 {
   const std::string out = directory + "/stdout.txt", err = directory + "/stderr.txt";
-  const std::string command =
-    std::string(VU_BINARY_DIR) + "/bin/virtual-unwrap info " + arguments + " >'" + out + "' 2>'" + err + "'";
+  const std::string command = std::string(VU_BINARY_DIR) + "/bin/virtual-unwrap " + subcommandAndArguments + " >'" +
+                              out + "' 2>'" + err + "'";
   const int status = std::system(command.c_str());
   ToolRun   run;
   run.Status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   run.Out = Slurp(out);
   run.Err = Slurp(err);
   return run;
+}
+
+ToolRun
+Info(const std::string & arguments, const std::string & directory)
+{
+  return Tool("info " + arguments, directory);
 }
 
 void
@@ -178,6 +185,51 @@ TEST(vuCommandInfo, BadInputGivesOneLineAndNonZeroStatus)
   const ToolRun failed = Info("'" + directory + "/missing' -o '" + directory + "/out.json'", directory);
   EXPECT_NE(failed.Status, 0);
   EXPECT_FALSE(fs::exists(directory + "/out.json"));
+}
+
+// Meshes and volumes that parse but hold nothing usable are refused as bad input, by
+// name, before any simulation or segmentation runs; nothing is written.
+TEST(vuCommandInfo, EmptyMeshNaNVertexAndNaNVolumeAreNamed)
+{
+  const std::string directory = WorkDirectory();
+  const std::string emptyObj = directory + "/empty.obj", nanObj = directory + "/nan_vertex.obj";
+  std::ofstream(emptyObj).close();
+  std::ofstream(nanObj) << "v 0 0 0\nv 1 0 0\nv nan 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n";
+  const std::string flat = directory + "/flat.obj";
+  // Progress lines go to standard error: the refusal is its last line.
+  auto lastLine = [](const std::string & text) {
+    const size_t end = text.find_last_not_of('\n');
+    const size_t begin = text.rfind('\n', end);
+    return text.substr(begin == std::string::npos ? 0 : begin + 1, end + 1 - (begin == std::string::npos ? 0 : begin + 1));
+  };
+  ToolRun run = Tool("flatten '" + emptyObj + "' -o '" + flat + "'", directory);
+  EXPECT_EQ(run.Status, 1);
+  EXPECT_NE(lastLine(run.Err).find("no points"), std::string::npos) << run.Err;
+  EXPECT_FALSE(fs::exists(flat));
+  EXPECT_EQ(fs::file_size(emptyObj), 0u);
+
+  run = Tool("flatten '" + nanObj + "' -o '" + flat + "'", directory);
+  EXPECT_EQ(run.Status, 1);
+  EXPECT_NE(lastLine(run.Err).find(":3: vertex 3 has a non-finite coordinate"), std::string::npos) << run.Err;
+  EXPECT_FALSE(fs::exists(flat));
+
+  using ImageType = itk::Image<float, 3>;
+  auto                  volume = ImageType::New();
+  ImageType::RegionType region;
+  region.SetSize({ { 12, 12, 12 } });
+  volume->SetRegions(region);
+  volume->Allocate();
+  volume->FillBuffer(std::numeric_limits<float>::quiet_NaN());
+  const std::string nanVolume = directory + "/nan.mha";
+  itk::WriteImage(volume, nanVolume);
+  for (const std::string command : { "unwrap", "segment" })
+  {
+    const std::string out = directory + "/" + command + "-out";
+    run = Tool(command + " '" + nanVolume + "' -o '" + out + "'", directory);
+    EXPECT_EQ(run.Status, 1) << command;
+    EXPECT_NE(lastLine(run.Err).find("no finite voxel (all 1728 are NaN)"), std::string::npos) << run.Err;
+    EXPECT_FALSE(fs::exists(out)) << command;
+  }
 }
 
 // A hospital head CT series (18.5 degree tilt, 4 then 7 mm): info reads it,

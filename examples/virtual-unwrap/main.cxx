@@ -72,8 +72,10 @@ OneLine(std::string text)
       c = ' ';
     }
   }
-  // itkExceptionMacro prefixes "ITK ERROR: Class(0x...): ", which tells a user nothing.
-  static const std::regex prefix("^ITK ERROR: [^(]*\\(0x[0-9a-fA-F]+\\): ");
+  // itkExceptionMacro prefixes "ITK ERROR: Class(0x...): " and itkGenericExceptionMacro
+  // "ITK ERROR: ", also when the text is quoted inside another message: neither tells a
+  // user anything.
+  static const std::regex prefix("ITK ERROR: ([^( ]*\\(0x[0-9a-fA-F]+\\): )?");
   return std::regex_replace(text, prefix, "");
 }
 } // namespace

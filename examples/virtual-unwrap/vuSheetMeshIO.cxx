@@ -33,7 +33,12 @@
 #include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
 
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 namespace vu {
 namespace {
@@ -58,6 +63,39 @@ ToPolyData(const itk::SheetMesh & mesh)
   polyData->SetPolys(triangles);
   return polyData;
 }
+
+// ITK's OBJ reader parses coordinates with an input stream, which neither accepts nor
+// reports "nan" or "inf"; it leaves whatever it had. Every vertex line is checked here so
+// that a non-finite or unreadable coordinate is named, with its line, as bad input.
+void
+CheckObjVertices(const std::string & path)
+{
+  std::ifstream file(path);
+  std::string   line;
+  size_t        lineNumber = 0;
+  size_t        vertex = 0;
+  while (std::getline(file, line))
+  {
+    ++lineNumber;
+    if (line.size() < 2 || line[0] != 'v' || !std::isspace(static_cast<unsigned char>(line[1])))
+    {
+      continue;
+    }
+    const char * cursor = line.c_str() + 1;
+    for (int d = 0; d < 3; ++d)
+    {
+      char *       end = nullptr;
+      const double value = std::strtod(cursor, &end);
+      if (end == cursor || !std::isfinite(value))
+      {
+        throw UsageError(path + ":" + std::to_string(lineNumber) + ": vertex " + std::to_string(vertex + 1) +
+                         (end == cursor ? " has fewer than three coordinates" : " has a non-finite coordinate"));
+      }
+      cursor = end;
+    }
+    ++vertex;
+  }
+}
 } // namespace
 
 itk::SheetMesh
@@ -68,7 +106,11 @@ ReadSheetMesh(const std::string & path)
     throw UsageError("mesh file not found: " + path);
   }
   itk::SheetMesh sheet;
-  if (std::filesystem::path(path).extension() == ".vtp")
+  std::string    extension = std::filesystem::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) {
+    return static_cast<char>(std::tolower(c));
+  });
+  if (extension == ".vtp")
   {
     vtkNew<vtkXMLPolyDataReader> reader;
     reader->SetFileName(path.c_str());
@@ -116,12 +158,16 @@ ReadSheetMesh(const std::string & path)
     try
     {
       reader->Update();
+      sheet = itk::MeshToSheetMesh(reader->GetOutput());
     }
     catch (const itk::ExceptionObject & e)
     {
       throw UsageError("cannot read a mesh from " + path + ": " + e.GetDescription());
     }
-    sheet = itk::MeshToSheetMesh(reader->GetOutput());
+    if (extension == ".obj")
+    {
+      CheckObjVertices(path);
+    }
   }
   try
   {
