@@ -46,6 +46,14 @@ namespace itk {
  *   Ink is denser than the sheet and covers a small part of it, so the texture that shows
  *   it best scores highest; structure and noise raise the spread and lower the score.
  *   Returns 0 when fewer than 2 pixels are finite or the spread is 0.
+ * - LayerWindow(): the mean of layers first .. first + count - 1 of a stack, pixel by
+ *   pixel over the finite samples (NaN where none is): a focal slab through the sheet. On a
+ *   noisy scan the mean of the few layers that hold the ink keeps it and averages the
+ *   noise, where the maximum over many noisy layers can pick the noise's extremes.
+ * - StrokeContrast(): InkContrast() of the band-pass Smooth(strokeSigma) -
+ *   Smooth(6 strokeSigma): letters' strokes are kept, the sheet's slow changes of
+ *   brightness (a slab drifting towards a face, the sheet's edges) and pixel noise are not,
+ *   so among focal slabs of a noisy scan the one that shows the writing scores highest.
  * - NoiseSpread(): 1.4826 x the median absolute deviation of the finite pixels (the
  *   standard deviation for Gaussian noise): the spread of the sheet's background, which
  *   covers most of a texture; 0 when fewer than 2 pixels are finite.
@@ -95,8 +103,14 @@ public:
           double                 gaussianSigma,
           double                 coreWidth);
 
+  static TextureType::Pointer
+  LayerWindow(const LayerStackType * stack, unsigned int first, unsigned int count);
+
   static double
   InkContrast(const TextureType * texture);
+
+  static double
+  StrokeContrast(const TextureType * texture, double strokeSigma);
 
   static double
   NoiseSpread(const TextureType * texture);

@@ -272,6 +272,73 @@ LayerStackTexture::InkContrast(const TextureType * texture)
   return spread > 0.0 ? (top - median) / spread : 0.0;
 }
 
+LayerStackTexture::TextureType::Pointer
+LayerStackTexture::LayerWindow(const LayerStackType * stack, unsigned int first, unsigned int count)
+{
+  if (stack == nullptr)
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::LayerWindow: no layer stack");
+  }
+  const auto size = stack->GetBufferedRegion().GetSize();
+  if (stack->GetBufferedRegion() != stack->GetLargestPossibleRegion() || count == 0 ||
+      static_cast<SizeValueType>(first) + count > size[2])
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::LayerWindow: layers " << first << " to "
+                             << static_cast<SizeValueType>(first) + count - 1 << " are not in a stack of " << size[2]
+                             << " layers, or the stack is not fully buffered");
+  }
+  auto                   texture = TextureType::New();
+  TextureType::SizeType  textureSize = { { size[0], size[1] } };
+  TextureType::PointType origin;
+  origin[0] = stack->GetOrigin()[0];
+  origin[1] = stack->GetOrigin()[1];
+  TextureType::SpacingType spacing;
+  spacing[0] = stack->GetSpacing()[0];
+  spacing[1] = stack->GetSpacing()[1];
+  texture->SetRegions(textureSize);
+  texture->SetOrigin(origin);
+  texture->SetSpacing(spacing);
+  texture->Allocate();
+  const float *       in = stack->GetBufferPointer();
+  float *             out = texture->GetBufferPointer();
+  const SizeValueType plane = size[0] * size[1];
+  for (SizeValueType i = 0; i < plane; ++i)
+  {
+    double sum = 0.0;
+    int    finite = 0;
+    for (unsigned int k = first; k < first + count; ++k)
+    {
+      const float v = in[k * plane + i];
+      if (std::isfinite(v))
+      {
+        sum += v;
+        ++finite;
+      }
+    }
+    out[i] = finite > 0 ? static_cast<float>(sum / finite) : NaN;
+  }
+  return texture;
+}
+
+double
+LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigma)
+{
+  CheckTexture(texture, "StrokeContrast");
+  CheckParameter(strokeSigma, false, "StrokeContrast", "the stroke sigma");
+  const auto    fine = Smooth(texture, strokeSigma);
+  const auto    coarse = Smooth(texture, 6.0 * strokeSigma);
+  auto          band = NewTexture(texture);
+  const float * f = fine->GetBufferPointer();
+  const float * c = coarse->GetBufferPointer();
+  float *       b = band->GetBufferPointer();
+  const size_t  n = texture->GetBufferedRegion().GetNumberOfPixels();
+  for (size_t i = 0; i < n; ++i)
+  {
+    b[i] = std::isfinite(f[i]) && std::isfinite(c[i]) ? f[i] - c[i] : NaN;
+  }
+  return InkContrast(band);
+}
+
 double
 LayerStackTexture::NoiseSpread(const TextureType * texture)
 {

@@ -925,9 +925,12 @@ TraceRoll(const SheetVolumeView &             volume,
   {
     growth.push_back(seedTrace.At(m + tracer.Frame().Rays) - seedTrace.At(m));
   }
-  result.Rolled =
-    turns >= 1.0 && result.Explained >= 0.6 &&
-    std::abs(Median(growth)) >= std::max(settings.Voxel, 0.5 * tracer.Width());
+  // Noise adds crossings no trace explains: a trace of two turns or more that grows by the
+  // turn spacing every turn is a spiral with fewer of them explained.
+  const double medianGrowth = growth.empty() ? 0.0 : std::abs(Median(growth));
+  const bool   growsByPitch = medianGrowth >= 0.6 * tracer.Pitch() && medianGrowth <= 1.6 * tracer.Pitch();
+  result.Rolled = turns >= 1.0 && medianGrowth >= std::max(settings.Voxel, 0.5 * tracer.Width()) &&
+                  (result.Explained >= 0.6 || (turns >= 2.0 && growsByPitch && result.Explained >= 0.4));
   progress(0.1);
 
   // Every slice, outwards from the seed, with the previous slice's trace as prior. The

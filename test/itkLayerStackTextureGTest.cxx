@@ -424,3 +424,60 @@ TEST(LayerStackTexture, DeconvolveUndoesAGaussianBlur)
   EXPECT_NEAR(LST::ScanBlurSigma(0.0, 0.3), 0.3 / std::sqrt(12.0), 1e-12);
   EXPECT_THROW(LST::ScanBlurSigma(-0.1, 0.1), itk::ExceptionObject);
 }
+
+// A focal slab is the mean of its layers over the finite samples; a window outside the
+// stack is refused.
+TEST(LayerStackTexture, LayerWindowAveragesTheFiniteSamplesOfItsLayers)
+{
+  auto stack = MakeStack(8, 6, 7, [](unsigned x, unsigned y, unsigned k) {
+    if (x == 0 && y == 0)
+    {
+      return NaN;
+    }
+    if (x == 1 && y == 0 && k == 3)
+    {
+      return NaN;
+    }
+    return static_cast<float>(k * 10 + x);
+  });
+  const auto slab = LST::LayerWindow(stack, 2, 3);
+  EXPECT_FLOAT_EQ(At(slab, 4, 2), 34.0f);        // layers 2, 3, 4: 24, 34, 44
+  EXPECT_FLOAT_EQ(At(slab, 1, 0), 31.0f); // layer 3 is NaN: (21 + 41) / 2
+  EXPECT_TRUE(std::isnan(At(slab, 0, 0)));
+  EXPECT_DOUBLE_EQ(slab->GetSpacing()[0], 0.5);
+  EXPECT_DOUBLE_EQ(slab->GetSpacing()[1], 0.25);
+  EXPECT_THROW(LST::LayerWindow(stack, 5, 3), itk::ExceptionObject);
+  EXPECT_THROW(LST::LayerWindow(stack, 0, 0), itk::ExceptionObject);
+  EXPECT_THROW(LST::LayerWindow(nullptr, 0, 1), itk::ExceptionObject);
+}
+
+// Under noise as strong as the ink, the slab through the inked layers has the highest
+// stroke contrast, and it shows the writing; a slab without ink scores lower.
+TEST(LayerStackTexture, StrokeContrastFindsTheInkedSlabUnderNoise)
+{
+  std::mt19937                    random(7);
+  std::normal_distribution<float> noise(0.0f, 1.0f);
+  const unsigned                  layers = 11;
+  // Strokes 3 pixels wide every 12 pixels in rows 20 to 40, in layers 6 to 8 only.
+  auto ink = [](unsigned x, unsigned y) { return y >= 20 && y < 40 && x % 12 < 3 ? 1.5f : 0.0f; };
+  auto stack = MakeStack(160, 60, layers, [&](unsigned x, unsigned y, unsigned k) {
+    return 1.0f + (k >= 6 && k <= 8 ? ink(x, y) : 0.0f) + noise(random);
+  });
+  const auto truth = MakeTexture(160, 60, 0.5, [&](unsigned x, unsigned y) { return ink(x, y); });
+  unsigned   best = 0;
+  double     bestScore = -1.0;
+  for (unsigned first = 0; first + 3 <= layers; ++first)
+  {
+    const double score = LST::StrokeContrast(LST::Smooth(LST::LayerWindow(stack, first, 3), 0.5), 0.5);
+    if (score > bestScore)
+    {
+      bestScore = score;
+      best = first;
+    }
+  }
+  EXPECT_EQ(best, 6u);
+  const auto slab = LST::Smooth(LST::LayerWindow(stack, best, 3), 0.5);
+  EXPECT_GT(Correlation(slab, truth), 0.8);
+  EXPECT_GT(bestScore, 1.5 * LST::StrokeContrast(LST::Smooth(LST::LayerWindow(stack, 0, 3), 0.5), 0.5));
+  EXPECT_THROW(LST::StrokeContrast(slab, 0.0), itk::ExceptionObject);
+}

@@ -556,18 +556,39 @@ RunUnwrap(UnwrapOptions & options)
   // Candidate textures from the layer stack: the sides (both halves too with --side auto)
   // with and without the sheet's core subtracted (one side only with --subtract-core
   // auto), each denoised (median, then Gaussian) or restored; the one of highest ink
-  // contrast is kept.
+  // contrast is kept. On a noisy scan (the segmentation smoothed it) with --side auto the
+  // candidates are focal slabs instead: the mean of 3 or 5 neighbouring layers at every
+  // depth, scored by the contrast of letter-sized strokes (LayerStackTexture explains why
+  // neither the maximum over layers nor the plain ink contrast holds under noise).
   struct Candidate
   {
     SideEnum             Side;
     bool                 SubtractCore;
     double               InkContrast;
     TextureType::Pointer Texture;
+    unsigned int         First{ 0 }; // focal slab: its first layer and its number of layers
+    unsigned int         Count{ 0 };
   };
-  std::vector<Candidate>      candidates;
+  std::vector<Candidate> candidates;
+  const bool             focalSlabs = automaticSide && segmentation->GetAppliedDenoisingSigma() > 0.0;
+  const double           strokeSigma = 0.5 * voxel;
+  if (focalSlabs)
+  {
+    for (const unsigned int count : { 3u, 5u })
+    {
+      for (unsigned int first = 0; first + count <= layerCount; ++first)
+      {
+        const auto smoothed =
+          denoise(itk::LayerStackTexture::LayerWindow(texturer->GetLayerStackOutput(), first, count));
+        candidates.push_back(
+          { SideEnum::Both, false, itk::LayerStackTexture::StrokeContrast(smoothed, strokeSigma), smoothed, first, count });
+      }
+    }
+  }
   const std::vector<SideEnum> sides =
-    automaticSide ? std::vector<SideEnum>{ SideEnum::Both, SideEnum::Positive, SideEnum::Negative }
-                  : std::vector<SideEnum>{ stackSide };
+    focalSlabs ? std::vector<SideEnum>{}
+    : automaticSide ? std::vector<SideEnum>{ SideEnum::Both, SideEnum::Positive, SideEnum::Negative }
+                    : std::vector<SideEnum>{ stackSide };
   for (const SideEnum side : sides)
   {
     std::vector<bool> cores;
@@ -605,21 +626,34 @@ RunUnwrap(UnwrapOptions & options)
   nlohmann::json candidateReport = nlohmann::json::array();
   for (const Candidate & c : candidates)
   {
-    candidateReport.push_back(
-      { { "side", SideName(c.Side) }, { "subtract_core", c.SubtractCore }, { "ink_contrast", c.InkContrast } });
+    if (c.Count > 0)
+    {
+      candidateReport.push_back({ { "layers", { c.First, c.First + c.Count - 1 } }, { "stroke_contrast", c.InkContrast } });
+    }
+    else
+    {
+      candidateReport.push_back(
+        { { "side", SideName(c.Side) }, { "subtract_core", c.SubtractCore }, { "ink_contrast", c.InkContrast } });
+    }
   }
+  // A focal slab's depth: its middle layer's offset from the stack's middle (the focus).
+  const double slabFocus =
+    options.Focus +
+    (static_cast<double>(chosen.First) + 0.5 * (static_cast<double>(chosen.Count) - 1.0) - 0.5 * (layerCount - 1.0)) *
+      layerSpacing;
 
   // The per-vertex texture (surface.vtp) samples the chosen side with the same filter,
   // without core subtraction or denoising.
-  const unsigned int vertexLayers = chosen.Side == stackSide ? layerCount : (layerCount + 1) / 2;
+  const unsigned int vertexLayers =
+    chosen.Count > 0 ? chosen.Count : (chosen.Side == stackSide ? layerCount : (layerCount + 1) / 2);
   auto               perVertex = itk::LayeredTextureMeshFilter<MeshType, VolumeType, MeshType>::New();
   perVertex->SetInput(surfaceMesh);
   perVertex->SetVolume(volume);
   perVertex->SetNumberOfLayers(vertexLayers);
   perVertex->SetLayerSpacing(layerSpacing);
-  perVertex->SetFocus(options.Focus);
+  perVertex->SetFocus(chosen.Count > 0 ? slabFocus : options.Focus);
   perVertex->SetLayerSide(chosen.Side);
-  perVertex->SetLayerFilter(FilterFromName(options.Filter));
+  perVertex->SetLayerFilter(chosen.Count > 0 ? itk::TextureLayersEnums::Filter::Mean : FilterFromName(options.Filter));
   perVertex->Update();
   std::vector<float> vertexTexture(surface.GetNumberOfPoints(), 0.0f);
   for (auto it = perVertex->GetOutput()->GetPointData()->Begin(); it != perVertex->GetOutput()->GetPointData()->End();
@@ -692,7 +726,13 @@ RunUnwrap(UnwrapOptions & options)
                                { "layer_spacing_mm", layerSpacing },
                                { "side", SideName(chosen.Side) },
                                { "side_requested", options.Side },
-                               { "filter", options.Filter },
+                               { "filter", chosen.Count > 0 ? std::string("mean") : options.Filter },
+                               { "filter_requested", options.Filter },
+                               { "focal_slab",
+                                 chosen.Count > 0
+                                   ? nlohmann::json{ { "layers", { chosen.First, chosen.First + chosen.Count - 1 } },
+                                                     { "depth_mm", slabFocus } }
+                                   : nlohmann::json(false) },
                                { "subtract_core", chosen.SubtractCore },
                                { "subtract_core_requested", options.SubtractCore },
                                { "core_width_mm", coreWidth },
@@ -710,8 +750,12 @@ RunUnwrap(UnwrapOptions & options)
                                { "pixel_size_mm", pixelSize },
                                { "selection",
                                  { { "criterion",
-                                     "highest ink contrast, (99th percentile - median) / (1.4826 median absolute "
-                                     "deviation) of the denoised texture" },
+                                     focalSlabs
+                                       ? "noisy scan: focal slabs (mean of 3 or 5 layers) at every depth; highest "
+                                         "stroke contrast, the ink contrast of the denoised slab band-passed "
+                                         "between Gaussians of 0.5 and 3 voxels"
+                                       : "highest ink contrast, (99th percentile - median) / (1.4826 median "
+                                         "absolute deviation) of the denoised texture" },
                                    { "candidates", candidateReport } } } } },
                            { "simulation", ToJson(flattener.GetParameters()) } };
   report["mesh"] = { { "points", surface.GetNumberOfPoints() },
