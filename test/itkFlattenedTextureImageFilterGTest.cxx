@@ -396,7 +396,7 @@ TEST(FlattenedTextureImageFilter, AbortStopsTheFilter)
 }
 
 // The standard rolled phantom with the true flattening supplied (the phantom's exact
-// mid-surface and its unrolling), issue 6: the per-pixel texture against the ground-truth
+// mid-surface and its unrolling), the per-pixel texture against the ground-truth
 // ink image. Two things held it at 0.89 with the whole sheet compared:
 // - the sheet's outline: at its ends and long edges the mid-surface meets air, so the
 //   texture has a dark rim (about -400 HU against +250 HU of bare sheet) the ink image
@@ -490,7 +490,7 @@ TEST(FlattenedTextureImageFilter, StandardRolledPhantomWithTrueFlattening)
   itk::WriteImage(fair->GetAlignedTexture(), std::string(VU_BINARY_DIR) + "/FlattenedTexture_Standard_Aligned.mha");
   itk::WriteImage(restoredTexture, std::string(VU_BINARY_DIR) + "/FlattenedTexture_Standard_Restored.mha");
 
-  // Issue 6's line: the restored texture against the sharp ink. The sampled texture
+  // The restored texture against the sharp ink. The sampled texture
   // alone stays below the ceiling the scanner's blur leaves; against the blurred ink it
   // is close to exact.
   EXPECT_GE(restored->GetNormalizedCrossCorrelation(), 0.95);

@@ -100,9 +100,15 @@ main(int argc, char * argv[])
   {
     app.parse(argc, argv);
   }
-  catch (const CLI::ParseError & e)
+  catch (const CLI::Success & e) // --help, --version
   {
     return app.exit(e);
+  }
+  catch (const CLI::ParseError & e)
+  {
+    // One line like every other error (CLI11's own report adds a second).
+    std::cerr << "virtual-unwrap: error: " << OneLine(e.what()) << " (see virtual-unwrap --help)" << std::endl;
+    return 2;
   }
   catch (const itk::ExceptionObject & e)
   {

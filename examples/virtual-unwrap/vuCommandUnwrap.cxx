@@ -831,7 +831,7 @@ RegisterUnwrapCommand(CLI::App & app)
     ->group(seg);
   command->add_option("--mesh-spacing", options.MeshSpacing, "mesh spacing in mm; 0: automatic from the scene")
     ->capture_default_str()
-    ->check(CLI::NonNegativeNumber)
+    ->check(vu::NonNegative())
     ->group(seg);
   command->add_option("--method", options.Method, "mid-surface method: auto, roll or general")
     ->capture_default_str()
@@ -843,11 +843,11 @@ RegisterUnwrapCommand(CLI::App & app)
                  options.Layers,
                  "number of layers sampled along the normal; 0: enough to span the measured sheet thickness")
     ->capture_default_str()
-    ->check(CLI::NonNegativeNumber)
+    ->check(vu::NonNegative())
     ->group(tex);
   command->add_option("--layer-spacing", options.LayerSpacing, "distance between layers in mm; 0: half the voxel size")
     ->capture_default_str()
-    ->check(CLI::NonNegativeNumber)
+    ->check(vu::NonNegative())
     ->group(tex);
   command
     ->add_option("--side",
@@ -906,7 +906,7 @@ RegisterUnwrapCommand(CLI::App & app)
     ->group(tex);
   command->add_option("--pixel-size", options.PixelSize, "texture pixel size in mm; 0: half the voxel size")
     ->capture_default_str()
-    ->check(CLI::NonNegativeNumber)
+    ->check(vu::NonNegative())
     ->group(tex);
   AddSimulationOptions(command, options.Simulation);
   command->add_option("--ground-truth",

@@ -23,11 +23,43 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
 namespace vu {
 /** A failure the user can act on: printed as one line, exit code 1. */
+/** Option checks with messages a user reads (CLI11's own ranges print the largest double
+ * in full): the value must be a finite number >= 0, or > 0. */
+inline CLI::Validator
+NonNegative()
+{
+  return CLI::Validator(
+    [](std::string & value) -> std::string {
+      double number = 0.0;
+      if (!CLI::detail::lexical_cast(value, number) || !(number >= 0.0) || !std::isfinite(number))
+      {
+        return "must be a number >= 0, not " + value;
+      }
+      return {};
+    },
+    "NONNEGATIVE");
+}
+inline CLI::Validator
+Positive()
+{
+  return CLI::Validator(
+    [](std::string & value) -> std::string {
+      double number = 0.0;
+      if (!CLI::detail::lexical_cast(value, number) || !(number > 0.0) || !std::isfinite(number))
+      {
+        return "must be a number > 0, not " + value;
+      }
+      return {};
+    },
+    "POSITIVE");
+}
+
 class UsageError : public std::runtime_error
 {
 public:

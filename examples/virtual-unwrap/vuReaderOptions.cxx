@@ -72,7 +72,7 @@ AddReaderOptions(CLI::App & command, ReaderOptions & options)
     .add_option("--resample-spacing",
                 options.ResampleSpacing,
                 "slice spacing in mm of a resampled DICOM series (default: its smallest slice spacing)")
-    ->check(CLI::PositiveNumber);
+    ->check(vu::Positive());
 }
 
 void

@@ -31,43 +31,43 @@ AddSimulationOptions(CLI::App * command, SimulationOptions & options)
     ->group(group);
   command->add_option("--time-step", p.TimeStep, "simulation time step in seconds; 0: automatic")
     ->capture_default_str()
-    ->check(CLI::NonNegativeNumber)
+    ->check(vu::NonNegative())
     ->group(group);
   command
     ->add_option("--time-step-safety", p.TimeStepSafety, "automatic explicit step as a fraction of its stability bound")
     ->capture_default_str()
-    ->check(CLI::PositiveNumber)
+    ->check(vu::Positive())
     ->group(group);
   command->add_option("--steps-per-fall", p.StepsPerFallTime, "automatic implicit step: fall time divided by this")
     ->capture_default_str()
-    ->check(CLI::PositiveNumber)
+    ->check(vu::Positive())
     ->group(group);
   command->add_option("--stiffness", p.Stiffness, "stiffness of a spring of mean length")
     ->capture_default_str()
-    ->check(CLI::PositiveNumber)
+    ->check(vu::Positive())
     ->group(group);
   command->add_option("--shear", p.ShearStiffnessRatio, "shear springs' stiffness relative to structural; 0: off")
     ->capture_default_str()
-    ->check(CLI::NonNegativeNumber)
+    ->check(vu::NonNegative())
     ->group(group);
   command->add_option("--bending", p.BendingStiffnessRatio, "bending springs' stiffness relative to structural; 0: off")
     ->capture_default_str()
-    ->check(CLI::NonNegativeNumber)
+    ->check(vu::NonNegative())
     ->group(group);
   command->add_option("--damping", p.Damping, "viscous damping (1/s); negative: automatic")
     ->capture_default_str()
     ->group(group);
   command->add_option("--spring-damping", p.SpringDamping, "damping along springs (s)")
     ->capture_default_str()
-    ->check(CLI::NonNegativeNumber)
+    ->check(vu::NonNegative())
     ->group(group);
   command->add_option("--gravity", p.Gravity, "gravity magnitude; 0: automatic (see --hanging-strain)")
     ->capture_default_str()
-    ->check(CLI::NonNegativeNumber)
+    ->check(vu::NonNegative())
     ->group(group);
   command->add_option("--hanging-strain", p.HangingStrain, "automatic gravity stretches a hanging row by this")
     ->capture_default_str()
-    ->check(CLI::PositiveNumber)
+    ->check(vu::Positive())
     ->group(group);
   command->add_option("--restitution", p.Restitution, "collision restitution k_r in [0, 1]")
     ->capture_default_str()
@@ -81,7 +81,7 @@ AddSimulationOptions(CLI::App * command, SimulationOptions & options)
     ->group(group);
   command->add_option("--max-steps", p.MaximumStepsPerPhase, "step limit of the unroll and of the flatten phase")
     ->capture_default_str()
-    ->check(CLI::PositiveNumber)
+    ->check(vu::Positive())
     ->group(group);
   command
     ->add_option("--coarse-particles", p.CoarseParticles, "grid meshes: simulate at most about this many particles")
