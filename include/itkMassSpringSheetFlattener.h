@@ -102,7 +102,9 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningParameters
   double KineticEnergyTolerance{ 1e-9 };
   double ResidualForceTolerance{ 1e-3 };
   /** The unroll phase is over only when the sheet hangs in a plane: RMS distance from its
-   * best-fitting plane below this fraction of the mean spring length. */
+   * best-fitting plane below this fraction of the mean spring length, and no triangle
+   * turned over as seen along the plane's normal (a curl left at the free end would fold
+   * over on the plane). */
   double PlanarityTolerance{ 0.25 };
   /** Quasi-static relaxation on the plane after the flatten phase: iteration limit and
    * tolerance on the relative residual force. */

@@ -833,17 +833,35 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
     down.normalize();
     system.SetGravity({ gravity * down.x(), gravity * down.y(), gravity * down.z() });
     // Unrolled: hanging in a plane. A sheet creeping out of its curl can be slow enough to
-    // pass for resting, so planarity is part of convergence.
-    auto planar = [&system, &p]() {
+    // pass for resting, so planarity is part of convergence: close to its plane on the
+    // whole, and no triangle seen from the plane's normal turned over. A small curl left at
+    // the free end (the inner turns of a long roll) passes the first and would fold over
+    // when the sheet is dropped onto the plane; it fails the second.
+    auto planar = [&system, &p, &simulated]() {
       Vec3                  centroid;
       const Eigen::Matrix3d axes = PrincipalAxes(system.GetPositions(), centroid);
+      const auto &          x = system.GetPositions();
       double                sum = 0.0;
       for (size_t i = 0; i < system.GetNumberOfParticles(); ++i)
       {
-        const double d = (PointOf(system.GetPositions(), i) - centroid).dot(axes.col(2));
+        const double d = (PointOf(x, i) - centroid).dot(axes.col(2));
         sum += d * d;
       }
-      return std::sqrt(sum / system.GetNumberOfParticles()) < p.PlanarityTolerance * system.GetMeanRestLength();
+      if (std::sqrt(sum / system.GetNumberOfParticles()) >= p.PlanarityTolerance * system.GetMeanRestLength())
+      {
+        return false;
+      }
+      size_t positive = 0, negative = 0;
+      for (size_t t = 0; t < simulated.GetNumberOfTriangles(); ++t)
+      {
+        const uint32_t * tri = &simulated.Triangles[3 * t];
+        const Vec3       e1 = PointOf(x, tri[1]) - PointOf(x, tri[0]);
+        const Vec3       e2 = PointOf(x, tri[2]) - PointOf(x, tri[0]);
+        const double     side = e1.cross(e2).dot(axes.col(2));
+        positive += side > 0.0 ? 1 : 0;
+        negative += side < 0.0 ? 1 : 0;
+      }
+      return std::min(positive, negative) == 0;
     };
     m_Report.Phases.push_back(RunPhase(system, "unroll", p, m_Callback, planar));
   }
