@@ -216,8 +216,7 @@ template <typename TMaskImage, typename TOutputMesh>
 auto
 SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxis(const SheetImageType *     sheetMask,
                                                                      const IntensityImageType * sheetIntensity,
-                                                                     bool &                     fromTensor)
-  -> AxisType
+                                                                     bool &                     fromTensor) -> AxisType
 {
   // The sheet does not change along the roll axis: its normals all lie across it, so the
   // axis is the direction of least gradient energy over the sheet (the structure tensor's
@@ -225,15 +224,16 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxis(const Sheet
   // there are none). Isotropic noise adds to every eigenvalue alike and moves no
   // eigenvector; the roll's edges add energy along the axis only. A flat or gently curved
   // sheet has two small eigenvalues and no such axis: then the centroids' line decides.
-  using FloatImageType = Image<float, 3>;
-  typename FloatImageType::Pointer source;
+  using SmoothingType = SmoothingRecursiveGaussianImageFilter<IntensityImageType, IntensityImageType>;
+  auto smoothing = SmoothingType::New();
   if (sheetIntensity != nullptr)
   {
-    source = const_cast<FloatImageType *>(static_cast<const FloatImageType *>(sheetIntensity));
+    smoothing->SetInput(sheetIntensity);
   }
   else
   {
-    source = FloatImageType::New();
+    // The mask as 0 / 1 intensities on its own buffered box.
+    auto source = IntensityImageType::New();
     source->CopyInformation(sheetMask);
     source->SetRegions(sheetMask->GetBufferedRegion());
     source->Allocate();
@@ -242,24 +242,23 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxis(const Sheet
     {
       source->GetBufferPointer()[i] = sheetMask->GetBufferPointer()[i] != 0 ? 1.0f : 0.0f;
     }
+    smoothing->SetInput(source);
   }
-  auto smoothing = SmoothingRecursiveGaussianImageFilter<FloatImageType, FloatImageType>::New();
-  smoothing->SetInput(source);
-  typename SmoothingRecursiveGaussianImageFilter<FloatImageType, FloatImageType>::SigmaArrayType sigmas;
+  typename SmoothingType::SigmaArrayType sigmas;
   for (unsigned d = 0; d < 3; ++d)
   {
     sigmas[d] = sheetMask->GetSpacing()[d];
   }
   smoothing->SetSigmaArray(sigmas);
   smoothing->Update();
-  const float *   smooth = smoothing->GetOutput()->GetBufferPointer();
-  const uint8_t * mask = sheetMask->GetBufferPointer();
-  const auto      size = sheetMask->GetBufferedRegion().GetSize();
-  const auto &    spacing = sheetMask->GetSpacing();
-  const auto &    direction = sheetMask->GetDirection();
-  const size_t    strides[3] = { 1, size[0], size[0] * size[1] };
-  double          tensor[3][3] = { { 0.0 } };
-  size_t          offset = 0;
+  const float *      smooth = smoothing->GetOutput()->GetBufferPointer();
+  const uint8_t *    mask = sheetMask->GetBufferPointer();
+  const auto         size = sheetMask->GetBufferedRegion().GetSize();
+  const auto &       spacing = sheetMask->GetSpacing();
+  const auto &       direction = sheetMask->GetDirection();
+  const size_t       strides[3] = { 1, size[0], size[0] * size[1] };
+  vnl_matrix<double> tensor(3, 3, 0.0);
+  size_t             offset = 0;
   for (size_t k = 0; k < size[2]; ++k)
   {
     for (size_t j = 0; j < size[1]; ++j)
@@ -288,21 +287,13 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxis(const Sheet
         {
           for (unsigned c = 0; c < 3; ++c)
           {
-            tensor[r][c] += physical[r] * physical[c];
+            tensor(r, c) += physical[r] * physical[c];
           }
         }
       }
     }
   }
-  vnl_matrix<double> matrix(3, 3);
-  for (unsigned r = 0; r < 3; ++r)
-  {
-    for (unsigned c = 0; c < 3; ++c)
-    {
-      matrix(r, c) = tensor[r][c];
-    }
-  }
-  const vnl_symmetric_eigensystem<double> eigen(matrix);
+  const vnl_symmetric_eigensystem<double> eigen(tensor);
   // Eigenvalues ascending. A roll spreads its normals evenly across the axis: the two
   // large eigenvalues are comparable and far above the axis's.
   constexpr double rolledEigenvalueRatio = 2.5;
@@ -427,7 +418,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AlignWithRollAxis(
   // Each pass resamples the original box along the current estimate. The structure tensor's
   // estimate is global and needs one; the centroids' is better from a better aligned grid
   // (partial slices bias it less), so it converges in a few.
-  for (int pass = 0; pass < (fromTensor ? 1 : 4); ++pass)
+  for (int pass = 0; pass < 4; ++pass)
   {
     AxisType firstAxis;
     for (unsigned r = 0; r < 3; ++r)

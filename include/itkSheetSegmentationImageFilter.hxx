@@ -29,10 +29,10 @@
 #include "itkRegionOfInterestImageFilter.h"
 #include "itkRelabelComponentImageFilter.h"
 
-#include <cmath>
 #include "itkSheetMidSurfaceExtractor.h"
 #include "itkSheetSegmentationImageFilter.h"
 #include "itkSmoothingRecursiveGaussianImageFilter.h"
+#include <cmath>
 
 namespace itk {
 template <typename TInputImage, typename TMaskImage>
@@ -125,8 +125,8 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
   if (minimum > maximum)
   {
     // The calculator skips NaN: nothing was left to compare.
-    itkExceptionMacro(<< "the volume has no finite voxel (all "
-                      << input->GetLargestPossibleRegion().GetNumberOfPixels() << " are NaN): nothing to segment");
+    itkExceptionMacro(<< "the volume has no finite voxel (all " << input->GetLargestPossibleRegion().GetNumberOfPixels()
+                      << " are NaN): nothing to segment");
   }
   if (std::isinf(minimum) || std::isinf(maximum))
   {

@@ -29,6 +29,7 @@
 namespace itk {
 namespace {
 using TextureType = LayerStackTexture::TextureType;
+using LayerStackType = LayerStackTexture::LayerStackType;
 
 constexpr float NaN = std::numeric_limits<float>::quiet_NaN();
 
@@ -39,6 +40,25 @@ NewTexture(const TextureType * like)
   auto texture = TextureType::New();
   texture->CopyInformation(like);
   texture->SetRegions(like->GetBufferedRegion());
+  texture->Allocate();
+  return texture;
+}
+
+TextureType::Pointer
+NewTexture(const LayerStackType * stack)
+{
+  const auto             size = stack->GetBufferedRegion().GetSize();
+  auto                   texture = TextureType::New();
+  TextureType::SizeType  textureSize = { { size[0], size[1] } };
+  TextureType::PointType origin;
+  origin[0] = stack->GetOrigin()[0];
+  origin[1] = stack->GetOrigin()[1];
+  TextureType::SpacingType spacing;
+  spacing[0] = stack->GetSpacing()[0];
+  spacing[1] = stack->GetSpacing()[1];
+  texture->SetRegions(textureSize);
+  texture->SetOrigin(origin);
+  texture->SetSpacing(spacing);
   texture->Allocate();
   return texture;
 }
@@ -216,18 +236,7 @@ LayerStackTexture::Combine(const LayerStackType * stack,
     }
   }
 
-  auto                   texture = TextureType::New();
-  TextureType::SizeType  textureSize = { { size[0], size[1] } };
-  TextureType::PointType origin;
-  origin[0] = stack->GetOrigin()[0];
-  origin[1] = stack->GetOrigin()[1];
-  TextureType::SpacingType spacing;
-  spacing[0] = stack->GetSpacing()[0];
-  spacing[1] = stack->GetSpacing()[1];
-  texture->SetRegions(textureSize);
-  texture->SetOrigin(origin);
-  texture->SetSpacing(spacing);
-  texture->Allocate();
+  auto texture = NewTexture(stack);
 
   const float *       in = stack->GetBufferPointer();
   float *             out = texture->GetBufferPointer();
@@ -287,18 +296,7 @@ LayerStackTexture::LayerWindow(const LayerStackType * stack, unsigned int first,
                              << static_cast<SizeValueType>(first) + count - 1 << " are not in a stack of " << size[2]
                              << " layers, or the stack is not fully buffered");
   }
-  auto                   texture = TextureType::New();
-  TextureType::SizeType  textureSize = { { size[0], size[1] } };
-  TextureType::PointType origin;
-  origin[0] = stack->GetOrigin()[0];
-  origin[1] = stack->GetOrigin()[1];
-  TextureType::SpacingType spacing;
-  spacing[0] = stack->GetSpacing()[0];
-  spacing[1] = stack->GetSpacing()[1];
-  texture->SetRegions(textureSize);
-  texture->SetOrigin(origin);
-  texture->SetSpacing(spacing);
-  texture->Allocate();
+  auto                texture = NewTexture(stack);
   const float *       in = stack->GetBufferPointer();
   float *             out = texture->GetBufferPointer();
   const SizeValueType plane = size[0] * size[1];

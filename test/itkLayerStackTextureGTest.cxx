@@ -429,7 +429,7 @@ TEST(LayerStackTexture, DeconvolveUndoesAGaussianBlur)
 // stack is refused.
 TEST(LayerStackTexture, LayerWindowAveragesTheFiniteSamplesOfItsLayers)
 {
-  auto stack = MakeStack(8, 6, 7, [](unsigned x, unsigned y, unsigned k) {
+  auto       stack = MakeStack(8, 6, 7, [](unsigned x, unsigned y, unsigned k) {
     if (x == 0 && y == 0)
     {
       return NaN;
@@ -441,7 +441,7 @@ TEST(LayerStackTexture, LayerWindowAveragesTheFiniteSamplesOfItsLayers)
     return static_cast<float>(k * 10 + x);
   });
   const auto slab = LST::LayerWindow(stack, 2, 3);
-  EXPECT_FLOAT_EQ(At(slab, 4, 2), 34.0f);        // layers 2, 3, 4: 24, 34, 44
+  EXPECT_FLOAT_EQ(At(slab, 4, 2), 34.0f); // layers 2, 3, 4: 24, 34, 44
   EXPECT_FLOAT_EQ(At(slab, 1, 0), 31.0f); // layer 3 is NaN: (21 + 41) / 2
   EXPECT_TRUE(std::isnan(At(slab, 0, 0)));
   EXPECT_DOUBLE_EQ(slab->GetSpacing()[0], 0.5);
@@ -459,8 +459,8 @@ TEST(LayerStackTexture, StrokeContrastFindsTheInkedSlabUnderNoise)
   std::normal_distribution<float> noise(0.0f, 1.0f);
   const unsigned                  layers = 11;
   // Strokes 3 pixels wide every 12 pixels in rows 20 to 40, in layers 6 to 8 only.
-  auto ink = [](unsigned x, unsigned y) { return y >= 20 && y < 40 && x % 12 < 3 ? 1.5f : 0.0f; };
-  auto stack = MakeStack(160, 60, layers, [&](unsigned x, unsigned y, unsigned k) {
+  auto       ink = [](unsigned x, unsigned y) { return y >= 20 && y < 40 && x % 12 < 3 ? 1.5f : 0.0f; };
+  auto       stack = MakeStack(160, 60, layers, [&](unsigned x, unsigned y, unsigned k) {
     return 1.0f + (k >= 6 && k <= 8 ? ink(x, y) : 0.0f) + noise(random);
   });
   const auto truth = MakeTexture(160, 60, 0.5, [&](unsigned x, unsigned y) { return ink(x, y); });

@@ -67,8 +67,8 @@ ToolRun
 Tool(const std::string & subcommandAndArguments, const std::string & directory)
 {
   const std::string out = directory + "/stdout.txt", err = directory + "/stderr.txt";
-  const std::string command = std::string(VU_BINARY_DIR) + "/bin/virtual-unwrap " + subcommandAndArguments + " >'" +
-                              out + "' 2>'" + err + "'";
+  const std::string command =
+    std::string(VU_BINARY_DIR) + "/bin/virtual-unwrap " + subcommandAndArguments + " >'" + out + "' 2>'" + err + "'";
   const int status = std::system(command.c_str());
   ToolRun   run;
   run.Status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -197,10 +197,12 @@ TEST(vuCommandInfo, EmptyMeshNaNVertexAndNaNVolumeAreNamed)
   std::ofstream(nanObj) << "v 0 0 0\nv 1 0 0\nv nan 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n";
   const std::string flat = directory + "/flat.obj";
   // Progress lines go to standard error: the refusal is its last line.
-  auto lastLine = [](const std::string & text) {
-    const size_t end = text.find_last_not_of('\n');
-    const size_t begin = text.rfind('\n', end);
-    return text.substr(begin == std::string::npos ? 0 : begin + 1, end + 1 - (begin == std::string::npos ? 0 : begin + 1));
+  auto lastLine = [](std::string text) {
+    while (!text.empty() && text.back() == '\n')
+    {
+      text.pop_back();
+    }
+    return text.substr(text.rfind('\n') + 1); // npos + 1 == 0: the whole text
   };
   ToolRun run = Tool("flatten '" + emptyObj + "' -o '" + flat + "'", directory);
   EXPECT_EQ(run.Status, 1);

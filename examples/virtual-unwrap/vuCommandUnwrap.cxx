@@ -580,13 +580,17 @@ RunUnwrap(UnwrapOptions & options)
       {
         const auto smoothed =
           denoise(itk::LayerStackTexture::LayerWindow(texturer->GetLayerStackOutput(), first, count));
-        candidates.push_back(
-          { SideEnum::Both, false, itk::LayerStackTexture::StrokeContrast(smoothed, strokeSigma), smoothed, first, count });
+        candidates.push_back({ SideEnum::Both,
+                               false,
+                               itk::LayerStackTexture::StrokeContrast(smoothed, strokeSigma),
+                               smoothed,
+                               first,
+                               count });
       }
     }
   }
   const std::vector<SideEnum> sides =
-    focalSlabs ? std::vector<SideEnum>{}
+    focalSlabs      ? std::vector<SideEnum>{}
     : automaticSide ? std::vector<SideEnum>{ SideEnum::Both, SideEnum::Positive, SideEnum::Negative }
                     : std::vector<SideEnum>{ stackSide };
   for (const SideEnum side : sides)
@@ -628,7 +632,8 @@ RunUnwrap(UnwrapOptions & options)
   {
     if (c.Count > 0)
     {
-      candidateReport.push_back({ { "layers", { c.First, c.First + c.Count - 1 } }, { "stroke_contrast", c.InkContrast } });
+      candidateReport.push_back(
+        { { "layers", { c.First, c.First + c.Count - 1 } }, { "stroke_contrast", c.InkContrast } });
     }
     else
     {
@@ -646,7 +651,7 @@ RunUnwrap(UnwrapOptions & options)
   // without core subtraction or denoising.
   const unsigned int vertexLayers =
     chosen.Count > 0 ? chosen.Count : (chosen.Side == stackSide ? layerCount : (layerCount + 1) / 2);
-  auto               perVertex = itk::LayeredTextureMeshFilter<MeshType, VolumeType, MeshType>::New();
+  auto perVertex = itk::LayeredTextureMeshFilter<MeshType, VolumeType, MeshType>::New();
   perVertex->SetInput(surfaceMesh);
   perVertex->SetVolume(volume);
   perVertex->SetNumberOfLayers(vertexLayers);
@@ -714,50 +719,49 @@ RunUnwrap(UnwrapOptions & options)
   endStage("write");
 
   // 7. Measures: distortion, and against the ground truth when there is one.
-  report["parameters"] = { { "threshold",
-                             { { "value", segmentation->GetThreshold() }, { "automatic", automaticThreshold } } },
-                           { "mesh",
-                             { { "method", itk::ToString(meshReport.Method) },
-                               { "spacing_along_sheet_mm", meshReport.SpacingAlongSheet },
-                               { "spacing_along_axis_mm", meshReport.SpacingAlongAxis } } },
-                           { "texture",
-                             { { "layers", layerCount },
-                               { "layers_combined", vertexLayers },
-                               { "layer_spacing_mm", layerSpacing },
-                               { "side", SideName(chosen.Side) },
-                               { "side_requested", options.Side },
-                               { "filter", chosen.Count > 0 ? std::string("mean") : options.Filter },
-                               { "filter_requested", options.Filter },
-                               { "focal_slab",
-                                 chosen.Count > 0
-                                   ? nlohmann::json{ { "layers", { chosen.First, chosen.First + chosen.Count - 1 } },
-                                                     { "depth_mm", slabFocus } }
-                                   : nlohmann::json(false) },
-                               { "subtract_core", chosen.SubtractCore },
-                               { "subtract_core_requested", options.SubtractCore },
-                               { "core_width_mm", coreWidth },
-                               { "median_radius_mm", medianRadius },
-                               { "smooth_sigma_mm", smoothSigma },
-                               { "restore",
-                                 restore ? nlohmann::json{ { "psf_fwhm_mm", psfFWHM },
-                                                           { "psf_sigma_mm", psfSigma },
-                                                           { "bilateral_domain_sigma_mm", restoreDomainSigma },
-                                                           { "bilateral_range_factor", RestoreRangeFactor },
-                                                           { "tikhonov_regularization", RestoreRegularization } }
-                                         : nlohmann::json(false) },
-                               { "display_border_mm", displayBorder },
-                               { "focus_mm", options.Focus },
-                               { "pixel_size_mm", pixelSize },
-                               { "selection",
-                                 { { "criterion",
-                                     focalSlabs
-                                       ? "noisy scan: focal slabs (mean of 3 or 5 layers) at every depth; highest "
-                                         "stroke contrast, the ink contrast of the denoised slab band-passed "
-                                         "between Gaussians of 0.5 and 3 voxels"
-                                       : "highest ink contrast, (99th percentile - median) / (1.4826 median "
-                                         "absolute deviation) of the denoised texture" },
-                                   { "candidates", candidateReport } } } } },
-                           { "simulation", ToJson(flattener.GetParameters()) } };
+  report["parameters"] = {
+    { "threshold", { { "value", segmentation->GetThreshold() }, { "automatic", automaticThreshold } } },
+    { "mesh",
+      { { "method", itk::ToString(meshReport.Method) },
+        { "spacing_along_sheet_mm", meshReport.SpacingAlongSheet },
+        { "spacing_along_axis_mm", meshReport.SpacingAlongAxis } } },
+    { "texture",
+      { { "layers", layerCount },
+        { "layers_combined", vertexLayers },
+        { "layer_spacing_mm", layerSpacing },
+        { "side", SideName(chosen.Side) },
+        { "side_requested", options.Side },
+        { "filter", chosen.Count > 0 ? std::string("mean") : options.Filter },
+        { "filter_requested", options.Filter },
+        { "focal_slab",
+          chosen.Count > 0 ? nlohmann::json{ { "layers", { chosen.First, chosen.First + chosen.Count - 1 } },
+                                             { "depth_mm", slabFocus } }
+                           : nlohmann::json(false) },
+        { "subtract_core", chosen.SubtractCore },
+        { "subtract_core_requested", options.SubtractCore },
+        { "core_width_mm", coreWidth },
+        { "median_radius_mm", medianRadius },
+        { "smooth_sigma_mm", smoothSigma },
+        { "restore",
+          restore ? nlohmann::json{ { "psf_fwhm_mm", psfFWHM },
+                                    { "psf_sigma_mm", psfSigma },
+                                    { "bilateral_domain_sigma_mm", restoreDomainSigma },
+                                    { "bilateral_range_factor", RestoreRangeFactor },
+                                    { "tikhonov_regularization", RestoreRegularization } }
+                  : nlohmann::json(false) },
+        { "display_border_mm", displayBorder },
+        { "focus_mm", options.Focus },
+        { "pixel_size_mm", pixelSize },
+        { "selection",
+          { { "criterion",
+              focalSlabs ? "noisy scan: focal slabs (mean of 3 or 5 layers) at every depth; highest "
+                           "stroke contrast, the ink contrast of the denoised slab band-passed "
+                           "between Gaussians of 0.5 and 3 voxels"
+                         : "highest ink contrast, (99th percentile - median) / (1.4826 median "
+                           "absolute deviation) of the denoised texture" },
+            { "candidates", candidateReport } } } } },
+    { "simulation", ToJson(flattener.GetParameters()) }
+  };
   report["mesh"] = { { "points", surface.GetNumberOfPoints() },
                      { "triangles", surface.GetNumberOfTriangles() },
                      { "grid", { surface.GridRows, surface.GridColumns } },

@@ -30,34 +30,31 @@
 namespace vu {
 /** A failure the user can act on: printed as one line, exit code 1. */
 /** Option checks with messages a user reads (CLI11's own ranges print the largest double
- * in full): the value must be a finite number >= 0, or > 0. */
+ * in full): the value must be a finite number >= 0 (NonNegative) or > 0 (Positive). */
 inline CLI::Validator
-NonNegative()
+NumberCheck(bool zeroAllowed)
 {
   return CLI::Validator(
-    [](std::string & value) -> std::string {
+    [zeroAllowed](std::string & value) -> std::string {
       double number = 0.0;
-      if (!CLI::detail::lexical_cast(value, number) || !(number >= 0.0) || !std::isfinite(number))
+      if (!CLI::detail::lexical_cast(value, number) || !std::isfinite(number) || number < 0.0 ||
+          (!zeroAllowed && number == 0.0))
       {
-        return "must be a number >= 0, not " + value;
+        return std::string("must be a number ") + (zeroAllowed ? ">= 0" : "> 0") + ", not " + value;
       }
       return {};
     },
-    "NONNEGATIVE");
+    zeroAllowed ? "NONNEGATIVE" : "POSITIVE");
+}
+inline CLI::Validator
+NonNegative()
+{
+  return NumberCheck(true);
 }
 inline CLI::Validator
 Positive()
 {
-  return CLI::Validator(
-    [](std::string & value) -> std::string {
-      double number = 0.0;
-      if (!CLI::detail::lexical_cast(value, number) || !(number > 0.0) || !std::isfinite(number))
-      {
-        return "must be a number > 0, not " + value;
-      }
-      return {};
-    },
-    "POSITIVE");
+  return NumberCheck(false);
 }
 
 class UsageError : public std::runtime_error
