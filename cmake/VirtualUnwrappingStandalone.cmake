@@ -35,6 +35,27 @@ include_directories(SYSTEM ${ITK_INCLUDE_DIRS})
 
 set(VU_WARNING_FLAGS -Wall -Wextra)
 
+# Sanitizers for the whole build (library, tool, tests, fuzz targets), e.g.
+# -DVirtualUnwrapping_SANITIZE=address,undefined (scripts/run-sanitizers.sh). Undefined
+# behaviour stops the program at the first report, as an address error does.
+set(VirtualUnwrapping_SANITIZE "" CACHE STRING "Sanitizers to build with (-fsanitize=...), empty for none")
+if(VirtualUnwrapping_SANITIZE)
+  add_compile_options(-fsanitize=${VirtualUnwrapping_SANITIZE} -fno-sanitize-recover=all -fno-omit-frame-pointer -g1)
+  add_link_options(-fsanitize=${VirtualUnwrapping_SANITIZE})
+endif()
+# Fuzz targets of every parser of user input. By default a bounded random-mutation driver
+# (test/fuzz/vuFuzzDriver.cxx) runs them on their seed corpora as tests; with
+# VirtualUnwrapping_USE_LIBFUZZER (Clang only) libFuzzer drives them, coverage-guided, and
+# the module's own code is instrumented for it.
+option(VirtualUnwrapping_BUILD_FUZZERS "Build the fuzz targets of every parser of user input" ON)
+option(VirtualUnwrapping_USE_LIBFUZZER "Build the fuzz targets for libFuzzer (Clang)" OFF)
+if(VirtualUnwrapping_USE_LIBFUZZER)
+  if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+    message(FATAL_ERROR "VirtualUnwrapping_USE_LIBFUZZER needs Clang (CXX=clang++)")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link)
+endif()
+
 function(itk_module_add_library _name)
   add_library(${_name} SHARED ${ARGN})
   target_include_directories(${_name} PUBLIC
@@ -61,6 +82,9 @@ if(VirtualUnwrapping_BUILD_EXAMPLES)
 endif()
 if(VirtualUnwrapping_BUILD_BENCHMARKS)
   add_subdirectory(benchmarks)
+endif()
+if(BUILD_TESTING AND VirtualUnwrapping_BUILD_EXAMPLES AND VirtualUnwrapping_BUILD_FUZZERS)
+  add_subdirectory(test/fuzz)
 endif()
 
 # Package configuration so that other projects can find_package(VirtualUnwrapping),

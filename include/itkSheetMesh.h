@@ -64,7 +64,7 @@ struct VirtualUnwrapping_EXPORT SheetMesh
 
   /** Throws itk::ExceptionObject naming the problem when the arrays are inconsistent:
    * sizes not multiples of three, a triangle index out of range, a triangle that repeats
-   * a point, or a non-finite coordinate. */
+   * a point, a non-finite coordinate, or a grid index outside GridRows x GridColumns. */
   void
   Validate(const std::string & what) const;
 

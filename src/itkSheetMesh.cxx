@@ -63,6 +63,23 @@ SheetMesh::Validate(const std::string & what) const
     itkGenericExceptionMacro(<< what << ": grid index has " << GridIndex.size() / 2 << " entries for " << n
                              << " points");
   }
+  // A sheet grid may miss some points (holes), not most of them: a far larger grid is a
+  // corrupt index, whose lookup tables would not fit in memory.
+  if (!GridIndex.empty() && static_cast<double>(GridRows) * static_cast<double>(GridColumns) > 16.0 * n + 16.0)
+  {
+    itkGenericExceptionMacro(<< what << ": a grid of " << GridRows << " x " << GridColumns << " for only " << n
+                             << " points");
+  }
+  for (size_t k = 0; k < GridIndex.size() / 2; ++k)
+  {
+    if (GridIndex[2 * k] < 0 || GridIndex[2 * k] >= GridRows || GridIndex[2 * k + 1] < 0 ||
+        GridIndex[2 * k + 1] >= GridColumns)
+    {
+      itkGenericExceptionMacro(<< what << ": point " << k << " has grid index (" << GridIndex[2 * k] << ", "
+                               << GridIndex[2 * k + 1] << ") outside the grid of " << GridRows << " x "
+                               << GridColumns);
+    }
+  }
 }
 
 std::vector<uint32_t>

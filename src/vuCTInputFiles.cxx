@@ -25,6 +25,9 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <regex>
 #include <sstream>
 
 namespace itk {
@@ -205,9 +208,91 @@ SizeText(const ImageIOBase * io)
   return text.str();
 }
 
+std::string
+MetaImageHeaderProblem(const std::string & file)
+{
+  std::ifstream in(file, std::ios::binary);
+  std::string   line;
+  long          dimensions = -1;
+  // MetaIO reads as many numbers per field as NDims says, whatever the file holds: a
+  // negative or huge NDims makes it read for hours. The header ends at ElementDataFile.
+  for (size_t read = 0; read < (1u << 20) && std::getline(in, line); read += line.size() + 1)
+  {
+    // MetaIO copies each field name into 255 bytes without checking (a line without '='
+    // runs on into the next name).
+    const auto equals = line.find('=');
+    if ((equals == std::string::npos ? line.size() : equals) >= 255)
+    {
+      return "cannot read " + file + ": a header line of " + std::to_string(line.size()) +
+             " characters is not a MetaImage field";
+    }
+    if (equals == std::string::npos)
+    {
+      continue;
+    }
+    const std::string key = Trim(line.substr(0, equals).c_str());
+    const std::string value = Trim(line.substr(equals + 1).c_str());
+    if (key == "NDims")
+    {
+      char * end = nullptr;
+      dimensions = std::strtol(value.c_str(), &end, 10);
+      if (end == value.c_str() || Trim(end) != "" || dimensions < 1 || dimensions > 10)
+      {
+        return "cannot read " + file + ": NDims must be a whole number from 1 to 10, not '" + value + "'";
+      }
+    }
+    else if (key == "DimSize" || key == "ElementNumberOfChannels" || key == "HeaderSize")
+    {
+      std::istringstream numbers(value);
+      std::string        number;
+      long               count = 0;
+      while (numbers >> number)
+      {
+        char *     end = nullptr;
+        const long n = std::strtol(number.c_str(), &end, 10);
+        if (*end != '\0' || n < (key == "HeaderSize" ? -1 : 1) || n > (1L << 31))
+        {
+          return "cannot read " + file + ": " + key + " must hold whole numbers, not '" + value + "'";
+        }
+        ++count;
+      }
+      if (key == "DimSize" && dimensions > 0 && count != dimensions)
+      {
+        return "cannot read " + file + ": DimSize holds " + std::to_string(count) + " sizes for NDims " +
+               std::to_string(dimensions);
+      }
+    }
+    else if (key == "ElementDataFile")
+    {
+      // A file-name pattern (name%03d.raw first last step) goes to printf with one int:
+      // one %d it may have, any other conversion would read what is not there.
+      static const std::regex pattern("[^%]*(%0?[0-9]*d[^%]*)?( .*)?");
+      if (!std::regex_match(value, pattern))
+      {
+        return "cannot read " + file + ": ElementDataFile '" + value +
+               "' is neither a file name nor a pattern with one %d";
+      }
+      break;
+    }
+  }
+  return {};
+}
+
 ImageIOBase::Pointer
 ReadImageHeader(const std::string & file)
 {
+  std::string extension = fs::path(file).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) {
+    return static_cast<char>(std::tolower(c));
+  });
+  if (extension == ".mha" || extension == ".mhd")
+  {
+    const std::string problem = MetaImageHeaderProblem(file);
+    if (!problem.empty())
+    {
+      throw std::runtime_error(problem);
+    }
+  }
   ImageIOBase::Pointer io = ImageIOFactory::CreateImageIO(file.c_str(), ImageIOFactory::IOFileModeEnum::ReadMode);
   if (io.IsNull())
   {

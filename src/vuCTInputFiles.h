@@ -92,7 +92,12 @@ ComponentTypeName(IOComponentEnum type, size_t bytes);
 std::string
 SizeText(const ImageIOBase * io);
 
-/** Reads the header of an image file, or says why it cannot. */
+/** Why the text header of a MetaImage (.mha, .mhd) cannot be handed to MetaIO, or "":
+ * NDims not a whole number from 1 to 10, DimSize not NDims positive whole numbers. */
+std::string
+MetaImageHeaderProblem(const std::string & file);
+
+/** Reads the header of an image file (a MetaImage checked first), or says why it cannot. */
 ImageIOBase::Pointer
 ReadImageHeader(const std::string & file);
 

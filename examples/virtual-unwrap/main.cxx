@@ -19,6 +19,8 @@
 // vuCommand*.cxx; this file only dispatches and turns failures into one-line errors.
 #include "vuCommands.h"
 
+#include "vuOutput.h"
+
 #include "itkMacro.h"
 
 #include <cstdio>
@@ -27,37 +29,7 @@
 #include <iostream>
 #include <regex>
 
-namespace vu {
-void
-WriteTextFileAtomically(const std::string & path, const std::string & text)
-{
-  const std::string temporary = path + ".partial";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << text;
-    out.close();
-    if (!out)
-    {
-      std::remove(temporary.c_str());
-      throw UsageError("cannot write " + path);
-    }
-  }
-  std::filesystem::rename(temporary, path);
-}
-
-void
-EmitJson(const nlohmann::json & json, const std::string & path)
-{
-  if (path.empty())
-  {
-    std::cout << json.dump(2) << std::endl;
-  }
-  else
-  {
-    WriteTextFileAtomically(path, json.dump(2) + "\n");
-  }
-}
-} // namespace vu
+#include <sys/resource.h>
 
 namespace {
 // ITK's exception text spans several lines (location, file, description): keep the
@@ -77,6 +49,29 @@ OneLine(std::string text)
   // user anything.
   static const std::regex prefix("ITK ERROR: ([^( ]*\\(0x[0-9a-fA-F]+\\): )?");
   return std::regex_replace(text, prefix, "");
+}
+
+// An allocation that failed cannot say how much it wanted: say what was being done and
+// what limits the memory.
+std::string
+OutOfMemory()
+{
+  std::string text = "out of memory";
+  if (!vu::GetActivity().empty())
+  {
+    text += " while " + vu::GetActivity();
+  }
+  struct rlimit limit
+  {};
+  if (getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY)
+  {
+    text += " (the address-space limit, ulimit -v, is " + vu::DescribeBytes(limit.rlim_cur) + ")";
+  }
+  else
+  {
+    text += " (a smaller --roi or a --shrink factor needs less)";
+  }
+  return text;
 }
 } // namespace
 
@@ -109,6 +104,16 @@ main(int argc, char * argv[])
     // One line like every other error (CLI11's own report adds a second).
     std::cerr << "virtual-unwrap: error: " << OneLine(e.what()) << " (see virtual-unwrap --help)" << std::endl;
     return 2;
+  }
+  catch (const itk::MemoryAllocationError &)
+  {
+    std::cerr << "virtual-unwrap: error: " << OutOfMemory() << std::endl;
+    return 1;
+  }
+  catch (const std::bad_alloc &)
+  {
+    std::cerr << "virtual-unwrap: error: " << OutOfMemory() << std::endl;
+    return 1;
   }
   catch (const itk::ExceptionObject & e)
   {

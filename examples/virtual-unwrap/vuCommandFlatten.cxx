@@ -52,8 +52,11 @@ RegisterFlattenCommand(CLI::App & app)
     itk::MassSpringSheetFlattener flattener;
     flattener.SetParameters(ResolveSimulationParameters(options, surface));
     const itk::SheetMesh flat = flattener.Flatten(surface);
-    // Written under a temporary name and renamed, so a failure leaves no partial mesh.
-    const std::string temporary = outputPath + ".partial" + extension;
+    // Written into a staging folder beside it and renamed, so a failure, a signal or a kill
+    // leaves no partial mesh.
+    OutputStaging     staging(outputPath, OutputStaging::Kind::File);
+    staging.RequireSpace(60 * flat.GetNumberOfPoints() + 40 * flat.GetNumberOfTriangles() + (1u << 20));
+    const std::string temporary = staging.FilePath().string();
     if (extension == ".obj")
     {
       WriteSheetMeshObj(temporary, flat);
@@ -62,7 +65,7 @@ RegisterFlattenCommand(CLI::App & app)
     {
       WriteSheetMeshVtp(temporary, flat);
     }
-    std::filesystem::rename(temporary, outputPath);
+    staging.Commit();
     nlohmann::json report;
     report["input"] = surfacePath;
     report["output"] = outputPath;

@@ -52,21 +52,6 @@ struct PhantomOptions
   std::map<std::string, double> Values;
 };
 
-// Removes the temporary output directory unless the command completed.
-struct TemporaryDirectory
-{
-  fs::path Path;
-  bool     Keep{ false };
-  ~TemporaryDirectory()
-  {
-    if (!Keep && !Path.empty())
-    {
-      std::error_code ignored;
-      fs::remove_all(Path, ignored);
-    }
-  }
-};
-
 std::string
 UnescapeNewlines(const std::string & text)
 {
@@ -277,18 +262,16 @@ RunPhantom(const PhantomOptions & options)
     throw UsageError(output.string() + " exists and is not empty (use --force to replace it)");
   }
 
-  // Everything is written beside the target and renamed into place at the end, so a
-  // failure leaves no partial output.
-  const fs::path     parent = output.has_parent_path() ? output.parent_path() : fs::path(".");
-  TemporaryDirectory temporary;
-  temporary.Path = parent / (output.filename().string() + ".partial-" + std::to_string(getpid()));
-  fs::remove_all(temporary.Path, error);
-  if (!fs::create_directories(temporary.Path, error))
-  {
-    throw UsageError("cannot create " + temporary.Path.string());
-  }
-
+  // Everything is written into a staging folder beside the target and moved into place at
+  // the end, so a failure, a signal or a kill leaves no partial output.
+  OutputStaging staging(output, OutputStaging::Kind::Folder);
   const auto start = std::chrono::steady_clock::now();
+  source->UpdateOutputInformation();
+  {
+    const auto volumeSize = source->GetOutput()->GetLargestPossibleRegion().GetSize();
+    SetActivity("generating a phantom volume of " + std::to_string(volumeSize[0]) + " x " +
+                std::to_string(volumeSize[1]) + " x " + std::to_string(volumeSize[2]) + " voxels");
+  }
   source->Update();
   const double generationSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const itk::SheetPhantomGeometry & geometry = source->GetGeometry();
@@ -297,10 +280,12 @@ RunPhantom(const PhantomOptions & options)
   const bool series =
     format == itk::CTVolumeWriter::FormatType::Dicom || format == itk::CTVolumeWriter::FormatType::Tiff;
   const std::string volumeName = series ? "volume" : std::string("volume.") + itk::CTVolumeWriter::FormatName(format);
-  auto              writer = itk::CTVolumeWriter::New();
+  // The volume at 16 bits a voxel, file headers, the ink image and the meshes.
+  staging.RequireSpace(2 * volume->GetLargestPossibleRegion().GetNumberOfPixels() + (16u << 20));
+  auto writer = itk::CTVolumeWriter::New();
   writer->SetInput(volume);
   writer->SetFormat(format);
-  writer->SetFileName((temporary.Path / volumeName).string());
+  writer->SetFileName((staging.Path() / volumeName).string());
   writer->SetSeed(source->GetSeed());
   writer->SetSeriesDescription("VirtualUnwrapping phantom " + options.Preset);
   // A hospital CT series: tilted gantry, spacing that changes, slices left out.
@@ -341,7 +326,7 @@ RunPhantom(const PhantomOptions & options)
   }
   writer->Write();
 
-  WriteInkPng(geometry.GetInkImage(), (temporary.Path / "ground_truth_ink.png").string());
+  WriteInkPng(geometry.GetInkImage(), (staging.Path() / "ground_truth_ink.png").string());
   const double meshSpacing = options.MeshSpacing > 0.0 ? options.MeshSpacing : source->GetVoxelSize();
   if ((geometry.GetSheetLength() / meshSpacing + 1.0) * (geometry.GetSheetWidth() / meshSpacing + 1.0) > 5.0e7)
   {
@@ -350,8 +335,8 @@ RunPhantom(const PhantomOptions & options)
   }
   itk::SheetMesh flat;
   const auto     surface = geometry.MakeMidSurfaceMesh(meshSpacing, &flat);
-  WriteObj(surface, (temporary.Path / "ground_truth_surface.obj").string());
-  WriteObj(flat, (temporary.Path / "ground_truth_flat.obj").string());
+  WriteObj(surface, (staging.Path() / "ground_truth_surface.obj").string());
+  WriteObj(flat, (staging.Path() / "ground_truth_flat.obj").string());
   const double totalSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   const auto     size = volume->GetLargestPossibleRegion().GetSize();
@@ -460,20 +445,9 @@ RunPhantom(const PhantomOptions & options)
       "image_spacing_mm[1] - 0.5; text upright and unmirrored when shown with row 0 at the top" }
   };
   json["timing_seconds"] = { { "volume", generationSeconds }, { "total", totalSeconds } };
-  WriteTextFileAtomically((temporary.Path / "ground_truth.json").string(), json.dump(2) + "\n");
+  WriteTextFileAtomically((staging.Path() / "ground_truth.json").string(), json.dump(2) + "\n");
 
-  if (fs::exists(output))
-  {
-    const fs::path old = parent / (output.filename().string() + ".old-" + std::to_string(getpid()));
-    fs::rename(output, old);
-    fs::rename(temporary.Path, output);
-    fs::remove_all(old, error);
-  }
-  else
-  {
-    fs::rename(temporary.Path, output);
-  }
-  temporary.Keep = true;
+  staging.Commit(OutputStaging::Existing::Replace);
   std::cout << "phantom " << options.Preset << ": " << size[0] << " x " << size[1] << " x " << size[2]
             << " voxels, sheet " << p.SheetLength << " x " << p.SheetWidth << " mm, volume " << generationSeconds
             << " s, total " << totalSeconds << " s -> " << output.string() << std::endl;

@@ -18,6 +18,8 @@
 // virtual-unwrap segment VOLUME -o DIR: sheet mask, mid-surface mesh and a JSON summary.
 #include "vuCommands.h"
 
+#include "itkCTVolumeReader.h"
+
 #include "itkImageFileReader.h"
 #include "itkImageFileWriter.h"
 #include "itkMesh.h"
@@ -68,6 +70,30 @@ ParseAutoOrNumber(const std::string & text, const std::string & option, double &
   return true;
 }
 
+} // namespace
+
+bool
+ParseMeshSpacing(const std::string & text, double spacing[2])
+{
+  if (text == "auto")
+  {
+    return false;
+  }
+  const auto comma = text.find(',');
+  ParseAutoOrNumber(text.substr(0, comma), "--mesh-spacing", spacing[0]);
+  spacing[1] = spacing[0];
+  if (comma != std::string::npos)
+  {
+    ParseAutoOrNumber(text.substr(comma + 1), "--mesh-spacing", spacing[1]);
+  }
+  if (!(spacing[0] > 0.0) || !(spacing[1] > 0.0))
+  {
+    throw UsageError("--mesh-spacing must be positive");
+  }
+  return true;
+}
+
+namespace {
 void
 RunSegment(const SegmentOptions & options)
 {
@@ -80,26 +106,12 @@ RunSegment(const SegmentOptions & options)
   }
   double     threshold = 0.0, spacing[2] = { 0.0, 0.0 };
   const bool fixedThreshold = ParseAutoOrNumber(options.Threshold, "--threshold", threshold);
-  if (options.MeshSpacing != "auto")
-  {
-    const auto   comma = options.MeshSpacing.find(',');
-    const bool   both = comma != std::string::npos;
-    const double along =
-      (ParseAutoOrNumber(options.MeshSpacing.substr(0, comma), "--mesh-spacing", spacing[0]), spacing[0]);
-    spacing[1] = along;
-    if (both)
-    {
-      ParseAutoOrNumber(options.MeshSpacing.substr(comma + 1), "--mesh-spacing", spacing[1]);
-    }
-    if (!(spacing[0] > 0.0) || !(spacing[1] > 0.0))
-    {
-      throw UsageError("--mesh-spacing must be positive");
-    }
-  }
+  ParseMeshSpacing(options.MeshSpacing, spacing);
   const itk::SheetSurfaceMethodEnum method = itk::SheetSurfaceMethodFromString(options.Method);
   const auto                        start = std::chrono::steady_clock::now();
 
-  auto reader = itk::ImageFileReader<VolumeType>::New();
+  // The CT reader, as unwrap reads: headers checked before ITK's readers see them.
+  auto reader = itk::CTVolumeReader::New();
   reader->SetFileName(options.Volume);
   reader->Update();
   auto segmentation = itk::SheetSegmentationImageFilter<VolumeType, MaskType>::New();
@@ -118,9 +130,17 @@ RunSegment(const SegmentOptions & options)
   surface->Update();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  std::filesystem::create_directories(options.Output);
-  const std::filesystem::path directory(options.Output);
-  auto                        maskWriter = itk::ImageFileWriter<MaskType>::New();
+  // Everything is written into a staging folder beside the output, moved into place at the
+  // end: an error or a kill leaves the output as it was.
+  OutputStaging               staging(options.Output, OutputStaging::Kind::Folder);
+  const std::filesystem::path directory = staging.Path();
+  const auto                  maskSize = segmentation->GetOutput()->GetLargestPossibleRegion().GetNumberOfPixels();
+  // The mask (compressed, at most its raw size) and two text meshes of ~40 bytes a point
+  // and ~30 a triangle.
+  staging.RequireSpace(maskSize + 2 * (40 * surface->GetSheetMesh().GetNumberOfPoints() +
+                                       30 * surface->GetSheetMesh().GetNumberOfTriangles()) +
+                       (1u << 20));
+  auto maskWriter = itk::ImageFileWriter<MaskType>::New();
   maskWriter->SetInput(segmentation->GetOutput());
   maskWriter->SetFileName((directory / "mask.mha").string());
   maskWriter->UseCompressionOn();
@@ -155,6 +175,7 @@ RunSegment(const SegmentOptions & options)
                         "general: normals dP/dw x dP/ds";
   json["seconds"] = seconds;
   EmitJson(json, (directory / "segment.json").string());
+  staging.Commit();
   std::cout << "segment: " << itk::ToString(report.Method) << ", threshold " << segmentation->GetThreshold() << ", "
             << mesh.GetNumberOfPoints() << " points, " << mesh.GetNumberOfTriangles() << " triangles -> "
             << options.Output << std::endl;
@@ -222,7 +243,7 @@ RegisterSegmentCommand(CLI::App & app)
                                       "Segment the sheet of a CT volume and mesh its mid-surface: writes mask.mha, "
                                                      "surface.obj, surface.vtk and segment.json into DIR.");
   static SegmentOptions options;
-  command->add_option("VOLUME", options.Volume, "CT volume (MHA, NRRD, NIfTI, ...), in HU")->required();
+  command->add_option("VOLUME", options.Volume, "CT scan: DICOM directory, TIFF stack (directory or glob), NRRD/MHA/NIfTI file")->required();
   command->add_option("-o,--output", options.Output, "output directory (created; files in it are replaced)")
     ->required();
   command->add_option("--threshold", options.Threshold, "material threshold in HU, or auto (Otsu on the object)")

@@ -52,6 +52,9 @@
 
 namespace vu {
 namespace {
+// Peak memory of unwrap per voxel of the volume read, beyond the program itself: measured
+// on phantoms of 0.8 to 60 million voxels (docs/robustness.md).
+constexpr double UnwrapBytesPerVoxel = 24.0;
 namespace fs = std::filesystem;
 using VolumeType = itk::Image<float, 3>;
 using MaskType = itk::Image<unsigned char, 3>;
@@ -418,6 +421,16 @@ RunUnwrap(UnwrapOptions & options)
   auto reader = itk::CTVolumeReader::New();
   ConfigureReader(options.Reader, options.Input, *reader);
   progress.Observe(reader);
+  reader->UpdateOutputInformation();
+  {
+    // The volume as read (float), its copies and the mask, segmentation's and meshing's
+    // work images: about UnwrapBytesPerVoxel bytes a voxel at the peak.
+    const auto voxels = reader->GetOutput()->GetLargestPossibleRegion().GetNumberOfPixels();
+    const auto size = reader->GetOutput()->GetLargestPossibleRegion().GetSize();
+    RequireMemory(static_cast<std::uintmax_t>(UnwrapBytesPerVoxel * static_cast<double>(voxels)),
+                  "unwrapping a volume of " + std::to_string(size[0]) + " x " + std::to_string(size[1]) + " x " +
+                    std::to_string(size[2]) + " voxels");
+  }
   reader->Update();
   VolumeType::Pointer volume = reader->GetOutput();
   for (const auto & w : reader->GetWarnings())
@@ -680,11 +693,21 @@ RunUnwrap(UnwrapOptions & options)
 
   // 6. Write everything under a temporary directory, then move it into place.
   progress.Start("write", "writing " + options.Output);
-  fs::create_directories(outputDirectory);
-  const fs::path staging = outputDirectory / (".partial-" + std::to_string(getpid()));
-  fs::remove_all(staging);
-  fs::create_directories(staging);
-  std::vector<std::string> written;
+  // Into a staging folder beside the output, moved into place when complete: an error, a
+  // signal or a kill leaves the output as it was.
+  OutputStaging  output(outputDirectory, OutputStaging::Kind::Folder);
+  const fs::path staging = output.Path();
+  {
+    // Images at their raw size (PNG and TIFF seldom exceed it), text meshes at ~60 bytes a
+    // point and ~40 a triangle, the preview and the report.
+    const auto           textureSize = texture->GetLargestPossibleRegion().GetSize();
+    const std::uintmax_t pixels = textureSize[0] * textureSize[1];
+    const std::uintmax_t layerCountInStack = layers->GetLargestPossibleRegion().GetNumberOfPixels() / std::max<std::uintmax_t>(1, pixels);
+    const std::uintmax_t meshBytes =
+      2 * (60 * surface.GetNumberOfPoints() + 40 * surface.GetNumberOfTriangles()) +
+      (60 * flat.GetNumberOfPoints() + 40 * flat.GetNumberOfTriangles());
+    output.RequireSpace(pixels * (4 + 1 + 1 + 4 * layerCountInStack) + meshBytes + (8u << 20));
+  }
   try
   {
     WriteImageFile(texture8.GetPointer(), staging / "texture.png");
@@ -711,10 +734,18 @@ RunUnwrap(UnwrapOptions & options)
     WriteSheetMeshObj((staging / "flat.obj").string(), flat, uv, "texture.png");
     WritePreview(filled.Volume, surface, texture8, staging / "preview.png");
   }
-  catch (...)
+  catch (const std::bad_alloc &)
   {
-    fs::remove_all(staging);
     throw;
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    // A writer's own words ("error out of disk space", "Write Error") with the file.
+    throw UsageError("cannot write the results into " + options.Output + ": " + e.GetDescription());
+  }
+  catch (const std::exception & e)
+  {
+    throw UsageError("cannot write the results into " + options.Output + ": " + e.what());
   }
   endStage("write");
 
@@ -806,11 +837,7 @@ RunUnwrap(UnwrapOptions & options)
   report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   report["peak_memory_mib"] = PeakMemoryMiB();
   WriteTextFileAtomically((staging / "report.json").string(), report.dump(2) + "\n");
-  for (const auto & entry : fs::directory_iterator(staging))
-  {
-    fs::rename(entry.path(), outputDirectory / entry.path().filename());
-  }
-  fs::remove_all(staging);
+  output.Commit();
   progress.Finish(options.Output, report);
 }
 } // namespace

@@ -18,6 +18,8 @@
 #ifndef vuCommands_h
 #define vuCommands_h
 
+#include "vuOutput.h"
+
 #include "itkSheetMidSurfaceExtractor.h"
 
 #include <CLI/CLI.hpp>
@@ -78,20 +80,17 @@ RegisterSegmentCommand(CLI::App & app);
 void
 RegisterUnwrapCommand(CLI::App & app);
 
-/** Writes text to path atomically: to a temporary name beside it, then renamed, so a
- * failure never leaves a half-written file. */
-void
-WriteTextFileAtomically(const std::string & path, const std::string & text);
+/** The mesh spacing of `segment`: "auto" (returns false), "MM" (both directions) or
+ * "S,W" (along the sheet, along the roll axis). Throws UsageError for anything else or
+ * a spacing that is not positive. */
+bool
+ParseMeshSpacing(const std::string & text, double spacing[2]);
 
 /** How well the sheet was traced, for segment.json and report.json: method, turns, turn
  * spacing, interpolated slices, mean confidence, the runs of slices traced with low
  * confidence and the possible layer jumps. */
 nlohmann::json
 TraceJson(const itk::SheetMidSurfaceReport & report);
-
-/** Pretty JSON to standard output or, when path is not empty, to a file (atomically). */
-void
-EmitJson(const nlohmann::json & json, const std::string & path);
 } // namespace vu
 
 #endif

@@ -17,6 +17,8 @@
  *=========================================================================*/
 #include "vuProgress.h"
 
+#include "vuOutput.h"
+
 #include "itkCommand.h"
 
 #include <unistd.h>
@@ -36,6 +38,7 @@ Progress::Start(const std::string & stage, const std::string & message)
 {
   m_Stage = stage;
   m_LastPercent = -1;
+  SetActivity(message);
   if (m_Quiet)
   {
     return;

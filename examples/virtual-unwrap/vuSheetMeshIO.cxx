@@ -37,7 +37,9 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <limits>
 #include <fstream>
 
 namespace vu {
@@ -96,6 +98,185 @@ CheckObjVertices(const std::string & path)
     ++vertex;
   }
 }
+
+// Legacy VTK PolyData, the part a sheet needs: POINTS, then POLYGONS (triangles), ASCII
+// or BINARY (big-endian), version 2 to 4 layout. Every size a section claims is checked
+// against the bytes left in the file before anything is allocated or read: both ITK's
+// and VTK's legacy readers read past their buffers on a truncated binary file.
+itk::SheetMesh
+ReadLegacyVtk(const std::string & path)
+{
+  auto fail = [&path](const std::string & why) { throw UsageError("cannot read a mesh from " + path + ": " + why); };
+  std::ifstream   in(path, std::ios::binary);
+  const uintmax_t fileSize = std::filesystem::file_size(path);
+  auto            remaining = [&in, fileSize]() -> uintmax_t {
+    const auto at = in.tellg();
+    return at < 0 || static_cast<uintmax_t>(at) > fileSize ? 0 : fileSize - static_cast<uintmax_t>(at);
+  };
+  std::string line, format, word, kind;
+  if (!std::getline(in, line) || line.rfind("# vtk DataFile", 0) != 0)
+  {
+    fail("not a legacy VTK file");
+  }
+  std::getline(in, line); // title
+  in >> format >> word >> kind;
+  if (!in || (format != "ASCII" && format != "BINARY"))
+  {
+    fail("the third line must say ASCII or BINARY");
+  }
+  if (word != "DATASET" || kind != "POLYDATA")
+  {
+    fail("not DATASET POLYDATA");
+  }
+  const bool     binary = format == "BINARY";
+  itk::SheetMesh sheet;
+  auto           bigEndian = [](const char * bytes, size_t size, void * value) {
+    char swapped[8];
+    for (size_t i = 0; i < size; ++i)
+    {
+      swapped[i] = bytes[size - 1 - i];
+    }
+    std::memcpy(value, swapped, size);
+  };
+  // Reads count 32-bit integers (cell sizes and point ids).
+  auto readIntegers = [&](long long count, std::vector<long long> & values) {
+    if (binary)
+    {
+      if (static_cast<uintmax_t>(count) * 4 > remaining())
+      {
+        fail("a cell section claims more data than the file holds");
+      }
+      in.get(); // the newline before the data
+      std::vector<char> bytes(static_cast<size_t>(count) * 4);
+      in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+      values.resize(static_cast<size_t>(count));
+      for (size_t i = 0; i < values.size(); ++i)
+      {
+        int32_t v = 0;
+        bigEndian(&bytes[4 * i], 4, &v);
+        values[i] = v;
+      }
+    }
+    else
+    {
+      if (static_cast<uintmax_t>(count) * 2 > remaining() + 1)
+      {
+        fail("a cell section claims more numbers than the file holds");
+      }
+      values.resize(static_cast<size_t>(count));
+      for (auto & v : values)
+      {
+        in >> v;
+      }
+    }
+    if (!in)
+    {
+      fail("a cell section is cut short or holds something other than whole numbers");
+    }
+  };
+  bool havePoints = false;
+  while (in >> word)
+  {
+    if (word == "POINTS")
+    {
+      long long   n = 0;
+      std::string type;
+      in >> n >> type;
+      const size_t bytes = type == "float" ? 4 : type == "double" ? 8 : 0;
+      if (!in || n <= 0 || bytes == 0)
+      {
+        fail("the POINTS line must give a positive count and float or double");
+      }
+      if (static_cast<uintmax_t>(n) * 3 * (binary ? bytes : 2) > remaining() + 1)
+      {
+        fail("POINTS claims " + std::to_string(n) + " points, more than the file holds");
+      }
+      sheet.Points.resize(static_cast<size_t>(3 * n));
+      if (binary)
+      {
+        in.get();
+        std::vector<char> data(sheet.Points.size() * bytes);
+        in.read(data.data(), static_cast<std::streamsize>(data.size()));
+        for (size_t i = 0; i < sheet.Points.size(); ++i)
+        {
+          if (bytes == 4)
+          {
+            float v = 0.0f;
+            bigEndian(&data[4 * i], 4, &v);
+            sheet.Points[i] = v;
+          }
+          else
+          {
+            bigEndian(&data[8 * i], 8, &sheet.Points[i]);
+          }
+        }
+      }
+      else
+      {
+        for (double & v : sheet.Points)
+        {
+          in >> v;
+        }
+      }
+      if (!in)
+      {
+        fail("POINTS is cut short or holds something other than numbers");
+      }
+      havePoints = true;
+    }
+    else if (word == "POLYGONS" || word == "VERTICES" || word == "LINES" || word == "TRIANGLE_STRIPS")
+    {
+      long long n = 0, size = 0;
+      in >> n >> size;
+      if (!in || n < 0 || size < 0 || size < n)
+      {
+        fail(word + " must give a cell count and a size");
+      }
+      std::vector<long long> values;
+      readIntegers(size, values);
+      if (word != "POLYGONS")
+      {
+        continue; // not part of a sheet
+      }
+      if (!havePoints)
+      {
+        fail("POLYGONS before POINTS");
+      }
+      size_t i = 0;
+      for (long long cell = 0; cell < n; ++cell)
+      {
+        if (i < values.size() && values[i] != 3)
+        {
+          fail("a polygon is not a triangle");
+        }
+        if (i + 3 >= values.size())
+        {
+          fail("POLYGONS holds fewer cells than it claims");
+        }
+        for (int k = 1; k <= 3; ++k)
+        {
+          if (values[i + k] < 0 || values[i + k] > std::numeric_limits<uint32_t>::max())
+          {
+            fail("a triangle refers to point " + std::to_string(values[i + k]));
+          }
+          sheet.Triangles.push_back(static_cast<uint32_t>(values[i + k]));
+        }
+        i += 4;
+      }
+      return sheet; // the attributes that may follow are not needed
+    }
+    else
+    {
+      break;
+    }
+  }
+  if (!havePoints)
+  {
+    fail("no POINTS");
+  }
+  fail("no POLYGONS");
+  return sheet;
+}
 } // namespace
 
 itk::SheetMesh
@@ -110,7 +291,11 @@ ReadSheetMesh(const std::string & path)
   std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) {
     return static_cast<char>(std::tolower(c));
   });
-  if (extension == ".vtp")
+  if (extension == ".vtk")
+  {
+    sheet = ReadLegacyVtk(path);
+  }
+  else if (extension == ".vtp")
   {
     vtkNew<vtkXMLPolyDataReader> reader;
     reader->SetFileName(path.c_str());

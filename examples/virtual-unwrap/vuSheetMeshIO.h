@@ -24,9 +24,10 @@
 #include <vector>
 
 namespace vu {
-/** Reads a triangle mesh: VTK XML PolyData (.vtp, with the sheet grid when the file carries
- * the point arrays GridRow and GridColumn) through VTK, anything else ITK's mesh IO reads
- * (OBJ, VTK legacy, OFF, BYU, GIFTI) through ITK. Throws vu::UsageError naming the file. */
+/** Reads a triangle mesh: VTK XML PolyData (.vtp) and legacy VTK PolyData (.vtk) through
+ * VTK, with the sheet grid when the file carries the point arrays GridRow and GridColumn;
+ * anything else ITK's mesh IO reads (OBJ, OFF, BYU, GIFTI) through ITK. Throws
+ * vu::UsageError naming the file. */
 itk::SheetMesh
 ReadSheetMesh(const std::string & path);
 
