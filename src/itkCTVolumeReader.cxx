@@ -529,6 +529,16 @@ CTVolumeReader::ExamineVolumeFile(const std::string & file)
 void
 CTVolumeReader::BuildPipeline()
 {
+  // The first and last files' headers are parsed by ITK's series reader just below; the
+  // slices to read, once the region of interest is known.
+  if (m_IsDicom)
+  {
+    const std::string aborting = FileGdcmAbortsOn({ m_SliceFileNames.front(), m_SliceFileNames.back() });
+    if (!aborting.empty())
+    {
+      Refuse(aborting + " is damaged: the DICOM parser cannot read it");
+    }
+  }
   OutputImageType * tail = nullptr;
   if (m_SliceFileNames.size() > 1)
   {
@@ -662,6 +672,13 @@ CTVolumeReader::BuildPipeline()
   // of interest does not stop the rest of the stack from being read.
   if (m_IsDicom)
   {
+    const std::vector<std::string> toRead(m_SliceFileNames.begin() + static_cast<std::ptrdiff_t>(m_FirstSliceToRead),
+                                          m_SliceFileNames.begin() + static_cast<std::ptrdiff_t>(m_EndSliceToRead));
+    const std::string              aborting = FileGdcmAbortsOn(toRead);
+    if (!aborting.empty())
+    {
+      Refuse(aborting + " is damaged: the DICOM parser cannot read it");
+    }
     for (size_t i = m_FirstSliceToRead; i < m_EndSliceToRead; ++i)
     {
       const std::string problem = TruncationProblem(m_SliceFileNames[i], m_DicomPixelBytes);

@@ -22,6 +22,12 @@
 
 #include "gdcmReader.h"
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -278,9 +284,69 @@ MetaImageHeaderProblem(const std::string & file)
   return {};
 }
 
+std::string
+TiffDirectoryProblem(const std::string & file)
+{
+  std::ifstream in(file, std::ios::binary);
+  unsigned char header[8] = {};
+  if (!in.read(reinterpret_cast<char *>(header), 8))
+  {
+    return {};
+  }
+  const bool little = header[0] == 'I' && header[1] == 'I' && header[2] == 42 && header[3] == 0;
+  const bool big = header[0] == 'M' && header[1] == 'M' && header[2] == 0 && header[3] == 42;
+  if (!little && !big)
+  {
+    return {}; // not a classic TIFF
+  }
+  auto u16 = [little](const unsigned char * p) -> uint32_t { return little ? p[0] | p[1] << 8 : p[1] | p[0] << 8; };
+  auto u32 = [little](const unsigned char * p) -> uint64_t {
+    return little ? uint64_t(p[0]) | uint64_t(p[1]) << 8 | uint64_t(p[2]) << 16 | uint64_t(p[3]) << 24
+                  : uint64_t(p[3]) | uint64_t(p[2]) << 8 | uint64_t(p[1]) << 16 | uint64_t(p[0]) << 24;
+  };
+  std::error_code error;
+  const uint64_t  size = fs::file_size(file, error);
+  // libtiff allocates and clears what a directory entry claims before reading it.
+  uint64_t offset = u32(header + 4);
+  for (int directory = 0; directory < 4096 && offset != 0; ++directory)
+  {
+    unsigned char count[2];
+    in.seekg(static_cast<std::streamoff>(offset));
+    if (offset + 2 > size || !in.read(reinterpret_cast<char *>(count), 2))
+    {
+      return "cannot read " + file + ": a TIFF directory lies beyond the end of the file";
+    }
+    const uint32_t                   entries = u16(count);
+    std::vector<unsigned char>       table(12u * entries + 4u);
+    if (offset + 2 + table.size() > size || !in.read(reinterpret_cast<char *>(table.data()), table.size()))
+    {
+      return "cannot read " + file + ": a TIFF directory runs past the end of the file";
+    }
+    for (uint32_t e = 0; e < entries; ++e)
+    {
+      const unsigned char * entry = &table[12u * e];
+      static const unsigned typeSize[] = { 1, 1, 1, 2, 4, 8, 1, 1, 2, 4, 8, 4, 8, 4, 1, 1, 8, 8, 8 };
+      const uint32_t        type = u16(entry + 2);
+      const uint64_t        bytes = u32(entry + 4) * (type < 19 ? typeSize[type] : 1);
+      if (bytes > size)
+      {
+        return "cannot read " + file + ": TIFF tag " + std::to_string(u16(entry)) + " claims " +
+               std::to_string(bytes) + " bytes, the file has " + std::to_string(size);
+      }
+    }
+    offset = u32(&table[12u * entries]);
+  }
+  return {};
+}
+
 ImageIOBase::Pointer
 ReadImageHeader(const std::string & file)
 {
+  const std::string tiffProblem = TiffDirectoryProblem(file);
+  if (!tiffProblem.empty())
+  {
+    throw std::runtime_error(tiffProblem);
+  }
   std::string extension = fs::path(file).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) {
     return static_cast<char>(std::tolower(c));
@@ -344,6 +410,84 @@ IsDicomDirectoryFile(const std::string & file)
     return false;
   }
   return reader.GetFile().GetHeader().GetMediaStorage() == gdcm::MediaStorage::MediaStorageDirectoryStorage;
+}
+
+std::string
+FileGdcmAbortsOn(const std::vector<std::string> & files)
+{
+  int channel[2];
+  if (files.empty() || pipe(channel) != 0)
+  {
+    return {};
+  }
+  const pid_t child = fork();
+  if (child < 0)
+  {
+    close(channel[0]);
+    close(channel[1]);
+    return {};
+  }
+  if (child == 0)
+  {
+    // The child parses each file as ITK's GDCM reader will, saying first which one. GDCM
+    // trusts the lengths a file claims: an element of gigabytes in a file of kilobytes is
+    // allocated and cleared. The child may use the address space it has now plus eight
+    // times the largest file and 256 MiB, and 10 s plus 50 ms a file.
+    close(channel[0]);
+    uintmax_t largest = 0;
+    for (const std::string & f : files)
+    {
+      std::error_code error;
+      largest = std::max<uintmax_t>(largest, fs::file_size(f, error));
+    }
+    uintmax_t     inUse = 0;
+    std::ifstream statm("/proc/self/statm");
+    statm >> inUse;
+    inUse *= static_cast<uintmax_t>(sysconf(_SC_PAGESIZE));
+    struct rlimit limit
+    {};
+    if (getrlimit(RLIMIT_AS, &limit) == 0)
+    {
+      const rlim_t wanted = static_cast<rlim_t>(inUse + 8 * largest + (256u << 20));
+      if (limit.rlim_cur == RLIM_INFINITY || wanted < limit.rlim_cur)
+      {
+        limit.rlim_cur = wanted;
+        setrlimit(RLIMIT_AS, &limit);
+      }
+    }
+    alarm(static_cast<unsigned>(10 + files.size() / 20));
+    gdcm::Trace::WarningOff();
+    gdcm::Trace::ErrorOff();
+    for (uint64_t i = 0; i < files.size(); ++i)
+    {
+      if (write(channel[1], &i, sizeof(i)) != static_cast<ssize_t>(sizeof(i)))
+      {
+        _exit(0);
+      }
+      gdcm::Reader reader;
+      reader.SetFileName(files[i].c_str());
+      reader.Read();
+    }
+    _exit(0);
+  }
+  close(channel[1]);
+  uint64_t last = 0, index = 0;
+  bool     started = false;
+  while (read(channel[0], &index, sizeof(index)) == static_cast<ssize_t>(sizeof(index)))
+  {
+    last = index;
+    started = true;
+  }
+  close(channel[0]);
+  int status = 0;
+  while (waitpid(child, &status, 0) < 0 && errno == EINTR)
+  {
+  }
+  if (started && WIFSIGNALED(status) && last < files.size())
+  {
+    return files[last];
+  }
+  return {};
 }
 
 std::string

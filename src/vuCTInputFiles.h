@@ -97,7 +97,14 @@ SizeText(const ImageIOBase * io);
 std::string
 MetaImageHeaderProblem(const std::string & file);
 
-/** Reads the header of an image file (a MetaImage checked first), or says why it cannot. */
+/** Why a TIFF file's directories cannot be handed to libtiff, or "" (also for a file
+ * that is not a TIFF): a directory beyond the end of the file, or an entry that claims
+ * more bytes than the file holds (libtiff allocates and clears them first). */
+std::string
+TiffDirectoryProblem(const std::string & file);
+
+/** Reads the header of an image file (a MetaImage or a TIFF checked first), or says why
+ * it cannot. */
 ImageIOBase::Pointer
 ReadImageHeader(const std::string & file);
 
@@ -112,6 +119,13 @@ MetaImageTruncation(const std::string & file, ImageIOBase * io);
  * apart from their file meta header alone, before the scanner reads their data set. */
 bool
 IsDicomDirectoryFile(const std::string & file);
+
+/** The first of the files on which GDCM's parser aborts the process (Debian's GDCM keeps
+ * its assertions, and a damaged file meta header trips one) or asks for far more memory
+ * or time than the file can justify (a length of gigabytes claimed in a small file), or
+ * "": they are parsed in a child process with limits, so that only the child fails. */
+std::string
+FileGdcmAbortsOn(const std::vector<std::string> & files);
 
 /** Why a file cannot hold all its pixels, or "": the file must reach past the start of
  * its Pixel Data value by the size of the image. GDCM fills the missing part of a

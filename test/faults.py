@@ -103,7 +103,12 @@ def kill_test(tool, work):
             continue
         print("SIGKILL %.3f s into writing: status %d, left %s" % (delay, status, left))
         if "out" in left:
-            failures.append("SIGKILL while writing left the output folder")
+            # Killed after the result was moved into place (while the process ended):
+            # complete, or a failure.
+            problem = complete_unwrap(os.path.join(work, "out"))
+            if problem:
+                failures.append("SIGKILL while writing left a partial output folder: " + problem)
+            shutil.rmtree(os.path.join(work, "out"))
     # Interrupted or terminated while writing or earlier: nothing at all remains (the
     # stale staging folders of the killed runs are removed by the next run too).
     for sig, stage in ((signal.SIGTERM, "write"), (signal.SIGINT, "write"), (signal.SIGTERM, "texture"),
@@ -117,6 +122,9 @@ def kill_test(tool, work):
             continue
         if status != -sig:
             failures.append("%s: status %d, not ended by the signal" % (sig.name, status))
+        if "out" in left and not complete_unwrap(os.path.join(work, "out")):
+            shutil.rmtree(os.path.join(work, "out"))  # the result was complete before the signal
+            left.remove("out")
         if left:
             failures.append("%s during %s left %s" % (sig.name, stage, left))
     # The next complete run: the whole result, nothing stale beside it.

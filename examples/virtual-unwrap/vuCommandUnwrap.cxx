@@ -52,9 +52,10 @@
 
 namespace vu {
 namespace {
-// Peak memory of unwrap per voxel of the volume read, beyond the program itself: measured
-// on phantoms of 0.8 to 60 million voxels (docs/robustness.md).
-constexpr double UnwrapBytesPerVoxel = 24.0;
+// Peak memory of unwrap per voxel of the volume read, beyond the program itself: 47 bytes
+// between the standard phantom at 0.1 and 0.05 mm (0.78 and 3.06 million voxels, peaks of
+// 127 and 230 MiB; docs/robustness.md), the texture stage's share included.
+constexpr double UnwrapBytesPerVoxel = 48.0;
 namespace fs = std::filesystem;
 using VolumeType = itk::Image<float, 3>;
 using MaskType = itk::Image<unsigned char, 3>;

@@ -210,6 +210,10 @@ main(int argc, char * argv[])
       folders.push_back(argument);
     }
   }
+  if (const char * override = std::getenv("VU_FUZZ_RUNS_OVERRIDE"))
+  {
+    runs = std::atol(override); // a test that may run no more than this (the seeds)
+  }
   std::vector<Bytes> corpus;
   for (const std::string & folder : folders)
   {
