@@ -76,8 +76,7 @@ SheetMesh::Validate(const std::string & what) const
         GridIndex[2 * k + 1] >= GridColumns)
     {
       itkGenericExceptionMacro(<< what << ": point " << k << " has grid index (" << GridIndex[2 * k] << ", "
-                               << GridIndex[2 * k + 1] << ") outside the grid of " << GridRows << " x "
-                               << GridColumns);
+                               << GridIndex[2 * k + 1] << ") outside the grid of " << GridRows << " x " << GridColumns);
     }
   }
 }

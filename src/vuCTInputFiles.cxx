@@ -316,8 +316,8 @@ TiffDirectoryProblem(const std::string & file)
     {
       return "cannot read " + file + ": a TIFF directory lies beyond the end of the file";
     }
-    const uint32_t                   entries = u16(count);
-    std::vector<unsigned char>       table(12u * entries + 4u);
+    const uint32_t             entries = u16(count);
+    std::vector<unsigned char> table(12u * entries + 4u);
     if (offset + 2 + table.size() > size || !in.read(reinterpret_cast<char *>(table.data()), table.size()))
     {
       return "cannot read " + file + ": a TIFF directory runs past the end of the file";
@@ -330,8 +330,8 @@ TiffDirectoryProblem(const std::string & file)
       const uint64_t        bytes = u32(entry + 4) * (type < 19 ? typeSize[type] : 1);
       if (bytes > size)
       {
-        return "cannot read " + file + ": TIFF tag " + std::to_string(u16(entry)) + " claims " +
-               std::to_string(bytes) + " bytes, the file has " + std::to_string(size);
+        return "cannot read " + file + ": TIFF tag " + std::to_string(u16(entry)) + " claims " + std::to_string(bytes) +
+               " bytes, the file has " + std::to_string(size);
       }
     }
     offset = u32(&table[12u * entries]);
@@ -481,8 +481,7 @@ FileGdcmAbortsOn(const std::vector<std::string> & files)
   close(channel[0]);
   int status = 0;
   while (waitpid(child, &status, 0) < 0 && errno == EINTR)
-  {
-  }
+  {}
   if (started && WIFSIGNALED(status) && last < files.size())
   {
     return files[last];

@@ -54,7 +54,7 @@ RegisterFlattenCommand(CLI::App & app)
     const itk::SheetMesh flat = flattener.Flatten(surface);
     // Written into a staging folder beside it and renamed, so a failure, a signal or a kill
     // leaves no partial mesh.
-    OutputStaging     staging(outputPath, OutputStaging::Kind::File);
+    OutputStaging staging(outputPath, OutputStaging::Kind::File);
     staging.RequireSpace(60 * flat.GetNumberOfPoints() + 40 * flat.GetNumberOfTriangles() + (1u << 20));
     const std::string temporary = staging.FilePath().string();
     if (extension == ".obj")

@@ -265,7 +265,7 @@ RunPhantom(const PhantomOptions & options)
   // Everything is written into a staging folder beside the target and moved into place at
   // the end, so a failure, a signal or a kill leaves no partial output.
   OutputStaging staging(output, OutputStaging::Kind::Folder);
-  const auto start = std::chrono::steady_clock::now();
+  const auto    start = std::chrono::steady_clock::now();
   source->UpdateOutputInformation();
   {
     const auto volumeSize = source->GetOutput()->GetLargestPossibleRegion().GetSize();

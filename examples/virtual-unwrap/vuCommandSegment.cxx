@@ -137,9 +137,10 @@ RunSegment(const SegmentOptions & options)
   const auto                  maskSize = segmentation->GetOutput()->GetLargestPossibleRegion().GetNumberOfPixels();
   // The mask (compressed, at most its raw size) and two text meshes of ~40 bytes a point
   // and ~30 a triangle.
-  staging.RequireSpace(maskSize + 2 * (40 * surface->GetSheetMesh().GetNumberOfPoints() +
-                                       30 * surface->GetSheetMesh().GetNumberOfTriangles()) +
-                       (1u << 20));
+  staging.RequireSpace(
+    maskSize +
+    2 * (40 * surface->GetSheetMesh().GetNumberOfPoints() + 30 * surface->GetSheetMesh().GetNumberOfTriangles()) +
+    (1u << 20));
   auto maskWriter = itk::ImageFileWriter<MaskType>::New();
   maskWriter->SetInput(segmentation->GetOutput());
   maskWriter->SetFileName((directory / "mask.mha").string());
@@ -243,7 +244,10 @@ RegisterSegmentCommand(CLI::App & app)
                                       "Segment the sheet of a CT volume and mesh its mid-surface: writes mask.mha, "
                                                      "surface.obj, surface.vtk and segment.json into DIR.");
   static SegmentOptions options;
-  command->add_option("VOLUME", options.Volume, "CT scan: DICOM directory, TIFF stack (directory or glob), NRRD/MHA/NIfTI file")->required();
+  command
+    ->add_option(
+      "VOLUME", options.Volume, "CT scan: DICOM directory, TIFF stack (directory or glob), NRRD/MHA/NIfTI file")
+    ->required();
   command->add_option("-o,--output", options.Output, "output directory (created; files in it are replaced)")
     ->required();
   command->add_option("--threshold", options.Threshold, "material threshold in HU, or auto (Otsu on the object)")

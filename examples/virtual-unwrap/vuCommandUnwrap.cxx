@@ -703,10 +703,10 @@ RunUnwrap(UnwrapOptions & options)
     // point and ~40 a triangle, the preview and the report.
     const auto           textureSize = texture->GetLargestPossibleRegion().GetSize();
     const std::uintmax_t pixels = textureSize[0] * textureSize[1];
-    const std::uintmax_t layerCountInStack = layers->GetLargestPossibleRegion().GetNumberOfPixels() / std::max<std::uintmax_t>(1, pixels);
-    const std::uintmax_t meshBytes =
-      2 * (60 * surface.GetNumberOfPoints() + 40 * surface.GetNumberOfTriangles()) +
-      (60 * flat.GetNumberOfPoints() + 40 * flat.GetNumberOfTriangles());
+    const std::uintmax_t layerCountInStack =
+      layers->GetLargestPossibleRegion().GetNumberOfPixels() / std::max<std::uintmax_t>(1, pixels);
+    const std::uintmax_t meshBytes = 2 * (60 * surface.GetNumberOfPoints() + 40 * surface.GetNumberOfTriangles()) +
+                                     (60 * flat.GetNumberOfPoints() + 40 * flat.GetNumberOfTriangles());
     output.RequireSpace(pixels * (4 + 1 + 1 + 4 * layerCountInStack) + meshBytes + (8u << 20));
   }
   try

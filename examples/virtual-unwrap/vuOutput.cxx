@@ -88,10 +88,10 @@ std::string g_Activity;
 
 // The staging folders a signal must remove, as plain character arrays: the handler may
 // only use what is safe in a signal handler (no allocation, no locks).
-constexpr int                                    MaximumStagings = 4;
-constexpr size_t                                 MaximumPath = 4096;
+constexpr int                                              MaximumStagings = 4;
+constexpr size_t                                           MaximumPath = 4096;
 std::array<std::array<char, MaximumPath>, MaximumStagings> g_Stagings{};
-volatile std::sig_atomic_t                       g_HandlersInstalled = 0;
+volatile std::sig_atomic_t                                 g_HandlersInstalled = 0;
 
 // Removes a folder tree with system calls only (openat, getdents64, unlinkat), which are
 // async-signal-safe; depth is bounded because staging folders are shallow.
@@ -377,13 +377,9 @@ OutputStaging::Commit(Existing existing)
     for (const auto & entry : fs::directory_iterator(m_Path))
     {
       const fs::path target = m_Destination / entry.path().filename();
-      if (fs::is_directory(target) && !fs::is_directory(entry.path()))
+      if (fs::is_directory(target) || fs::is_directory(entry.path()))
       {
-        fs::remove_all(target);
-      }
-      else if (fs::is_directory(entry.path()))
-      {
-        fs::remove_all(target);
+        fs::remove_all(target); // rename replaces a file, not a folder
       }
       fs::rename(entry.path(), target);
     }

@@ -43,8 +43,8 @@ ScratchFolder()
 {
   static const std::filesystem::path folder = [] {
     const char *          base = std::getenv("TMPDIR");
-    std::filesystem::path path = std::filesystem::path(base != nullptr && *base != '\0' ? base : "/tmp") /
-                                 ("vu-fuzz-" + std::to_string(getpid()));
+    std::filesystem::path path =
+      std::filesystem::path(base != nullptr && *base != '\0' ? base : "/tmp") / ("vu-fuzz-" + std::to_string(getpid()));
     std::filesystem::remove_all(path);
     std::filesystem::create_directories(path);
     std::atexit([] {

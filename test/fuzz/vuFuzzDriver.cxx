@@ -48,9 +48,9 @@ using Bytes = std::vector<uint8_t>;
 
 // The input being run, for the signal handlers (which may only use system calls).
 const uint8_t * volatile g_Input = nullptr;
-volatile size_t          g_InputSize = 0;
-char                     g_CrashPath[4096];
-char                     g_TimeoutPath[4096];
+volatile size_t g_InputSize = 0;
+char            g_CrashPath[4096];
+char            g_TimeoutPath[4096];
 
 void
 SaveInputAndDie(int signal)
@@ -88,14 +88,14 @@ Run(const Bytes & input, unsigned timeout)
   return 1;
 }
 
-const char * const Words[] = { "0",  "-1",  "1e308", "nan",        "inf", "-0", "4294967296", "18446744073709551615",
-                               "\n", " ",   "\\",  "9999999999", "1,",  ",",  "auto",       "%s" };
+const char * const Words[] = { "0",  "-1", "1e308", "nan",        "inf", "-0", "4294967296", "18446744073709551615",
+                               "\n", " ",  "\\",    "9999999999", "1,",  ",",  "auto",       "%s" };
 
 void
 Mutate(Bytes & input, const std::vector<Bytes> & corpus, std::mt19937_64 & random)
 {
-  auto       pick = [&random](size_t n) { return n == 0 ? size_t(0) : static_cast<size_t>(random() % n); };
-  const int  count = 1 + static_cast<int>(random() % 4);
+  auto      pick = [&random](size_t n) { return n == 0 ? size_t(0) : static_cast<size_t>(random() % n); };
+  const int count = 1 + static_cast<int>(random() % 4);
   for (int m = 0; m < count; ++m)
   {
     switch (random() % 8)
@@ -240,8 +240,7 @@ main(int argc, char * argv[])
     executed += Run(input, timeout);
   }
   std::mt19937_64 random(seed);
-  while (executed < runs &&
-         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < seconds)
+  while (executed < runs && std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() < seconds)
   {
     Bytes input = corpus[static_cast<size_t>(random() % corpus.size())];
     Mutate(input, corpus, random);
