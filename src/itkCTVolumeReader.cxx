@@ -241,6 +241,14 @@ CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool single
   {
     return false;
   }
+  if (scan.Series.empty() && !scan.Damaged.empty())
+  {
+    throw std::runtime_error(scan.Damaged.front() + ": it is damaged");
+  }
+  for (const std::string & damaged : scan.Damaged)
+  {
+    m_Warnings.push_back("skipped the damaged file " + damaged);
+  }
   if (scan.Series.empty())
   {
     throw std::runtime_error(singleFile ? m_FileName + " is a DICOM file without an image (a DICOMDIR or another "
@@ -533,10 +541,11 @@ CTVolumeReader::BuildPipeline()
   // slices to read, once the region of interest is known.
   if (m_IsDicom)
   {
-    const std::string aborting = FileGdcmAbortsOn({ m_SliceFileNames.front(), m_SliceFileNames.back() });
-    if (!aborting.empty())
+    const std::string problem =
+      DicomFilesProblem({ m_SliceFileNames.front(), m_SliceFileNames.back() }, m_DicomPixelBytes);
+    if (!problem.empty())
     {
-      Refuse(aborting + " is damaged: the DICOM parser cannot read it");
+      Refuse(problem);
     }
   }
   OutputImageType * tail = nullptr;
@@ -674,18 +683,10 @@ CTVolumeReader::BuildPipeline()
   {
     const std::vector<std::string> toRead(m_SliceFileNames.begin() + static_cast<std::ptrdiff_t>(m_FirstSliceToRead),
                                           m_SliceFileNames.begin() + static_cast<std::ptrdiff_t>(m_EndSliceToRead));
-    const std::string              aborting = FileGdcmAbortsOn(toRead);
-    if (!aborting.empty())
+    const std::string              problem = DicomFilesProblem(toRead, m_DicomPixelBytes);
+    if (!problem.empty())
     {
-      Refuse(aborting + " is damaged: the DICOM parser cannot read it");
-    }
-    for (size_t i = m_FirstSliceToRead; i < m_EndSliceToRead; ++i)
-    {
-      const std::string problem = TruncationProblem(m_SliceFileNames[i], m_DicomPixelBytes);
-      if (!problem.empty())
-      {
-        Refuse(problem);
-      }
+      Refuse(problem);
     }
   }
   if (m_UseRegionOfInterest || m_UsePhysicalRegionOfInterest)

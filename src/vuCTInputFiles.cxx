@@ -16,17 +16,14 @@
  *
  *=========================================================================*/
 #include "vuCTInputFiles.h"
+#include "vuIsolatedParse.h"
 
 #include "itkImageIOFactory.h"
 #include "itkMetaImageIO.h"
 
+#include "gdcmImageReader.h"
 #include "gdcmReader.h"
 
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <cerrno>
 
 #include <algorithm>
 #include <cctype>
@@ -322,17 +319,91 @@ TiffDirectoryProblem(const std::string & file)
     {
       return "cannot read " + file + ": a TIFF directory runs past the end of the file";
     }
+    // Width, length, bits per sample, compression, samples per pixel (TIFF's defaults).
+    uint64_t width = 0, length = 0, bits = 1, compression = 1, samples = 1, rowsPerStrip = 0, planar = 1;
+    uint64_t tileWidth = 0, tileLength = 0;
     for (uint32_t e = 0; e < entries; ++e)
     {
       const unsigned char * entry = &table[12u * e];
       static const unsigned typeSize[] = { 1, 1, 1, 2, 4, 8, 1, 1, 2, 4, 8, 4, 8, 4, 1, 1, 8, 8, 8 };
       const uint32_t        type = u16(entry + 2);
-      const uint64_t        bytes = u32(entry + 4) * (type < 19 ? typeSize[type] : 1);
+      const uint64_t        count = u32(entry + 4);
+      const uint64_t        bytes = count * (type < 19 ? typeSize[type] : 1);
       if (bytes > size)
       {
         return "cannot read " + file + ": TIFF tag " + std::to_string(u16(entry)) + " claims " + std::to_string(bytes) +
                " bytes, the file has " + std::to_string(size);
       }
+      // The first value of a SHORT or LONG entry; BitsPerSample of several samples lies
+      // elsewhere in the file, but its samples share one depth in any image ITK reads.
+      uint64_t first = type == 3 ? u16(entry + 8) : type == 4 ? u32(entry + 8) : 0;
+      if (type == 3 && bytes > 4)
+      {
+        unsigned char value[2] = {};
+        in.seekg(static_cast<std::streamoff>(u32(entry + 8)));
+        first = in.read(reinterpret_cast<char *>(value), 2) ? u16(value) : 0;
+        in.clear();
+      }
+      switch (u16(entry))
+      {
+        case 256:
+          width = first;
+          break;
+        case 257:
+          length = first;
+          break;
+        case 258:
+          bits = first;
+          break;
+        case 259:
+          compression = first;
+          break;
+        case 277:
+          samples = first;
+          break;
+        case 278:
+          rowsPerStrip = first;
+          break;
+        case 284:
+          planar = first;
+          break;
+        case 322:
+          tileWidth = first;
+          break;
+        case 323:
+          tileLength = first;
+          break;
+        default:
+          break;
+      }
+    }
+    // libtiff and ITK size their buffers from the image's claimed size: an uncompressed
+    // image cannot be larger than its file, a compressed one not more than the best ratio
+    // of TIFF's lossless codecs (deflate, about 1000:1) times it.
+    const double pixelBytes = static_cast<double>(width) * static_cast<double>(length) * static_cast<double>(samples) *
+                              static_cast<double>(bits) / 8.0;
+    const double holds = compression == 1 ? static_cast<double>(size) : 1100.0 * static_cast<double>(size) + 65536.0;
+    if (pixelBytes > holds)
+    {
+      return "cannot read " + file + ": its TIFF image claims " + std::to_string(width) + " x " +
+             std::to_string(length) + " pixels (" + std::to_string(static_cast<uint64_t>(pixelBytes)) +
+             " bytes), more than its " + std::to_string(size) + " bytes can hold" +
+             (compression == 1 ? "" : " even compressed");
+    }
+    // libtiff allocates and clears a table entry for every strip or tile the image's size
+    // implies, whatever the file holds: each takes at least one byte of the file.
+    const double parts =
+      (tileWidth > 0 && tileLength > 0
+         ? std::ceil(static_cast<double>(width) / static_cast<double>(tileWidth)) *
+             std::ceil(static_cast<double>(length) / static_cast<double>(tileLength))
+         : std::ceil(static_cast<double>(length) /
+                     static_cast<double>(std::max<uint64_t>(1, rowsPerStrip == 0 ? length : rowsPerStrip)))) *
+      static_cast<double>(planar == 2 ? samples : 1);
+    if (parts > static_cast<double>(size))
+    {
+      return "cannot read " + file + ": its TIFF image of " + std::to_string(width) + " x " + std::to_string(length) +
+             " pixels claims " + std::to_string(static_cast<uint64_t>(parts)) + " strips or tiles, more than its " +
+             std::to_string(size) + " bytes can hold";
     }
     offset = u32(&table[12u * entries]);
   }
@@ -413,78 +484,28 @@ IsDicomDirectoryFile(const std::string & file)
 }
 
 std::string
-FileGdcmAbortsOn(const std::vector<std::string> & files)
+DicomFilesProblem(const std::vector<std::string> & files, uintmax_t pixelBytes)
 {
-  int channel[2];
-  if (files.empty() || pipe(channel) != 0)
-  {
-    return {};
-  }
-  const pid_t child = fork();
-  if (child < 0)
-  {
-    close(channel[0]);
-    close(channel[1]);
-    return {};
-  }
-  if (child == 0)
-  {
-    // The child parses each file as ITK's GDCM reader will, saying first which one. GDCM
-    // trusts the lengths a file claims: an element of gigabytes in a file of kilobytes is
-    // allocated and cleared. The child may use the address space it has now plus eight
-    // times the largest file and 256 MiB, and 10 s plus 50 ms a file.
-    close(channel[0]);
-    uintmax_t largest = 0;
-    for (const std::string & f : files)
+  const IsolatedParse run = ParseInChildProcess(files, [pixelBytes](const std::string & file) {
+    QuietGdcm         quiet;
+    gdcm::ImageReader reader;
+    reader.SetFileName(file.c_str());
+    if (!reader.Read())
     {
-      std::error_code error;
-      largest = std::max<uintmax_t>(largest, fs::file_size(f, error));
+      return "cannot read " + file + ": the DICOM parser does not recognise it";
     }
-    uintmax_t     inUse = 0;
-    std::ifstream statm("/proc/self/statm");
-    statm >> inUse;
-    inUse *= static_cast<uintmax_t>(sysconf(_SC_PAGESIZE));
-    struct rlimit limit
-    {};
-    if (getrlimit(RLIMIT_AS, &limit) == 0)
-    {
-      const rlim_t wanted = static_cast<rlim_t>(inUse + 8 * largest + (256u << 20));
-      if (limit.rlim_cur == RLIM_INFINITY || wanted < limit.rlim_cur)
-      {
-        limit.rlim_cur = wanted;
-        setrlimit(RLIMIT_AS, &limit);
-      }
-    }
-    alarm(static_cast<unsigned>(10 + files.size() / 20));
-    gdcm::Trace::WarningOff();
-    gdcm::Trace::ErrorOff();
-    for (uint64_t i = 0; i < files.size(); ++i)
-    {
-      if (write(channel[1], &i, sizeof(i)) != static_cast<ssize_t>(sizeof(i)))
-      {
-        _exit(0);
-      }
-      gdcm::Reader reader;
-      reader.SetFileName(files[i].c_str());
-      reader.Read();
-    }
-    _exit(0);
-  }
-  close(channel[1]);
-  uint64_t last = 0, index = 0;
-  bool     started = false;
-  while (read(channel[0], &index, sizeof(index)) == static_cast<ssize_t>(sizeof(index)))
+    return TruncationProblem(file, pixelBytes);
+  });
+  for (const std::string & result : run.Results)
   {
-    last = index;
-    started = true;
+    if (!result.empty())
+    {
+      return result;
+    }
   }
-  close(channel[0]);
-  int status = 0;
-  while (waitpid(child, &status, 0) < 0 && errno == EINTR)
-  {}
-  if (started && WIFSIGNALED(status) && last < files.size())
+  if (!run.FailedFile.empty())
   {
-    return files[last];
+    return run.FailedFile + " is damaged: the DICOM parser " + run.Failure + " on it";
   }
   return {};
 }

@@ -120,12 +120,14 @@ MetaImageTruncation(const std::string & file, ImageIOBase * io);
 bool
 IsDicomDirectoryFile(const std::string & file);
 
-/** The first of the files on which GDCM's parser aborts the process (Debian's GDCM keeps
- * its assertions, and a damaged file meta header trips one) or asks for far more memory
- * or time than the file can justify (a length of gigabytes claimed in a small file), or
- * "": they are parsed in a child process with limits, so that only the child fails. */
+/** Why DICOM image files cannot be read, or "": the first file on which GDCM's parser
+ * aborts the process (Debian's GDCM keeps its assertions, and damaged headers trip them),
+ * asks for far more memory or time than the file can justify (a length of gigabytes
+ * claimed in a small file), does not find an image, or that is truncated
+ * (TruncationProblem). The files are parsed in a child process with limits, so that only
+ * the child fails (ParseInChildProcess). */
 std::string
-FileGdcmAbortsOn(const std::vector<std::string> & files);
+DicomFilesProblem(const std::vector<std::string> & files, uintmax_t pixelBytes);
 
 /** Why a file cannot hold all its pixels, or "": the file must reach past the start of
  * its Pixel Data value by the size of the image. GDCM fills the missing part of a

@@ -17,11 +17,14 @@
  *=========================================================================*/
 #include "vuDicomSeriesScan.h"
 #include "vuCTInputFiles.h"
+#include "vuIsolatedParse.h"
 
 #include "gdcmScanner.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 
 namespace itk {
 namespace detail {
@@ -45,82 +48,153 @@ const gdcm::Tag kFrameIncrementPointer(0x0028, 0x0009);
 const gdcm::Tag kSamplesPerPixel(0x0028, 0x0002);
 } // namespace
 
-DicomScan
-ScanDicomFiles(const std::vector<std::string> & files)
+namespace {
+const gdcm::Tag  kScannedTags[] = { kSeriesUID,
+                                    kSeriesNumber,
+                                    kSeriesDescription,
+                                    kModality,
+                                    kPosition,
+                                    kOrientation,
+                                    kRows,
+                                    kColumns,
+                                    kPixelSpacing,
+                                    kNumberOfFrames,
+                                    kRescaleIntercept,
+                                    kRescaleSlope,
+                                    kBitsAllocated,
+                                    kPixelRepresentation,
+                                    kGantryTilt,
+                                    kFrameIncrementPointer,
+                                    kSamplesPerPixel };
+constexpr size_t kScannedTagCount = sizeof(kScannedTags) / sizeof(kScannedTags[0]);
+
+// One file's header as the child process sends it: "D" for a DICOMDIR, "N" for a file
+// that is not DICOM, or "S" and the values of kScannedTags, each after its length.
+std::string
+ScanOneFile(const std::string & file)
 {
-  DicomScan                scan;
-  std::vector<std::string> candidates;
-  for (const std::string & f : files)
+  QuietGdcm quiet;
+  if (IsDicomDirectoryFile(file))
   {
-    if (IsDicomDirectoryFile(f))
-    {
-      ++scan.DicomFiles;
-    }
-    else
-    {
-      candidates.push_back(f);
-    }
+    return "D";
   }
   gdcm::Scanner scanner;
-  for (const gdcm::Tag & tag : { kSeriesUID,
-                                 kSeriesNumber,
-                                 kSeriesDescription,
-                                 kModality,
-                                 kPosition,
-                                 kOrientation,
-                                 kRows,
-                                 kColumns,
-                                 kPixelSpacing,
-                                 kNumberOfFrames,
-                                 kRescaleIntercept,
-                                 kRescaleSlope,
-                                 kBitsAllocated,
-                                 kPixelRepresentation,
-                                 kGantryTilt,
-                                 kFrameIncrementPointer,
-                                 kSamplesPerPixel })
+  for (const gdcm::Tag & tag : kScannedTags)
   {
     scanner.AddTag(tag);
   }
-  scanner.Scan(candidates);
-  for (const std::string & file : candidates)
+  scanner.Scan({ file });
+  if (!scanner.IsKey(file.c_str()))
   {
-    const char * f = file.c_str();
-    if (!scanner.IsKey(f))
+    return "N";
+  }
+  std::string record = "S";
+  for (const gdcm::Tag & tag : kScannedTags)
+  {
+    const char *      value = scanner.GetValue(file.c_str(), tag);
+    const std::string text = value != nullptr ? value : "";
+    const uint32_t    length = static_cast<uint32_t>(text.size());
+    record.append(reinterpret_cast<const char *>(&length), sizeof(length));
+    record += text;
+  }
+  return record;
+}
+
+// The values of a record of ScanOneFile, or none when it is not an image's record.
+std::vector<std::string>
+RecordValues(const std::string & record)
+{
+  std::vector<std::string> values;
+  if (record.empty() || record[0] != 'S')
+  {
+    return values;
+  }
+  size_t at = 1;
+  while (values.size() < kScannedTagCount && at + sizeof(uint32_t) <= record.size())
+  {
+    uint32_t length = 0;
+    std::copy_n(record.data() + at, sizeof(length), reinterpret_cast<char *>(&length));
+    at += sizeof(length);
+    if (length > record.size() - at)
+    {
+      return {};
+    }
+    values.push_back(record.substr(at, length));
+    at += length;
+  }
+  return values.size() == kScannedTagCount ? values : std::vector<std::string>{};
+}
+} // namespace
+
+DicomScan
+ScanDicomFiles(const std::vector<std::string> & files)
+{
+  // GDCM's scanner aborts the process on some damaged headers: the files are scanned in a
+  // child process, which starts again after the file it died on.
+  DicomScan                scan;
+  std::vector<std::string> records;
+  for (size_t next = 0; next < files.size();)
+  {
+    const std::vector<std::string> rest(files.begin() + static_cast<std::ptrdiff_t>(next), files.end());
+    IsolatedParse                  run = ParseInChildProcess(rest, ScanOneFile);
+    records.insert(records.end(), run.Results.begin(), run.Results.end());
+    next += run.Results.size();
+    if (!run.FailedFile.empty())
+    {
+      ++scan.DicomFiles;
+      scan.Damaged.push_back(run.FailedFile + " (the DICOM parser " + run.Failure + " on it)");
+      records.emplace_back();
+      ++next;
+    }
+  }
+  for (size_t i = 0; i < files.size(); ++i)
+  {
+    if (records[i] == "D")
+    {
+      ++scan.DicomFiles;
+      continue;
+    }
+    const std::vector<std::string> v = RecordValues(records[i]);
+    if (v.empty())
     {
       continue;
     }
     ++scan.DicomFiles;
+    auto value = [&v](const gdcm::Tag & tag) {
+      const size_t k = static_cast<size_t>(std::find(std::begin(kScannedTags), std::end(kScannedTags), tag) -
+                                           std::begin(kScannedTags));
+      return Trim(v[k].c_str());
+    };
     DicomSlice s;
-    s.File = file;
-    s.Rows = Trim(scanner.GetValue(f, kRows));
-    s.Columns = Trim(scanner.GetValue(f, kColumns));
+    s.File = files[i];
+    s.Rows = value(kRows);
+    s.Columns = value(kColumns);
     if (s.Rows.empty() || s.Columns.empty())
     {
       continue;
     }
-    s.SeriesUID = Trim(scanner.GetValue(f, kSeriesUID));
-    s.SeriesNumber = Trim(scanner.GetValue(f, kSeriesNumber));
-    s.SeriesDescription = Trim(scanner.GetValue(f, kSeriesDescription));
-    s.Modality = Trim(scanner.GetValue(f, kModality));
-    s.Position = ParseDecimals(Trim(scanner.GetValue(f, kPosition)));
-    s.Orientation = ParseDecimals(Trim(scanner.GetValue(f, kOrientation)));
-    s.PixelSpacing = ParseDecimals(Trim(scanner.GetValue(f, kPixelSpacing)));
-    const double frames = ParseDecimal(Trim(scanner.GetValue(f, kNumberOfFrames)), 1.0);
+    s.SeriesUID = value(kSeriesUID);
+    s.SeriesNumber = value(kSeriesNumber);
+    s.SeriesDescription = value(kSeriesDescription);
+    s.Modality = value(kModality);
+    s.Position = ParseDecimals(value(kPosition));
+    s.Orientation = ParseDecimals(value(kOrientation));
+    s.PixelSpacing = ParseDecimals(value(kPixelSpacing));
+    const double frames = ParseDecimal(value(kNumberOfFrames), 1.0);
     s.Frames = frames >= 1.0 ? static_cast<SizeValueType>(frames) : SizeValueType{ 1 };
-    s.Slope = ParseDecimal(Trim(scanner.GetValue(f, kRescaleSlope)), 1.0);
-    s.Intercept = ParseDecimal(Trim(scanner.GetValue(f, kRescaleIntercept)), 0.0);
-    s.BitsAllocated = ParseDecimal(Trim(scanner.GetValue(f, kBitsAllocated)), 16.0);
-    s.Signed = Trim(scanner.GetValue(f, kPixelRepresentation)) == "1";
-    s.SamplesPerPixel = ParseDecimal(Trim(scanner.GetValue(f, kSamplesPerPixel)), 1.0);
-    for (const char c : Trim(scanner.GetValue(f, kFrameIncrementPointer)))
+    s.Slope = ParseDecimal(value(kRescaleSlope), 1.0);
+    s.Intercept = ParseDecimal(value(kRescaleIntercept), 0.0);
+    s.BitsAllocated = ParseDecimal(value(kBitsAllocated), 16.0);
+    s.Signed = value(kPixelRepresentation) == "1";
+    s.SamplesPerPixel = ParseDecimal(value(kSamplesPerPixel), 1.0);
+    for (const char c : value(kFrameIncrementPointer))
     {
       if (std::isxdigit(static_cast<unsigned char>(c)))
       {
         s.FrameIncrementPointer += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
       }
     }
-    s.GantryTilt = Trim(scanner.GetValue(f, kGantryTilt));
+    s.GantryTilt = value(kGantryTilt);
     scan.Series[s.SeriesUID].push_back(s);
   }
   return scan;

@@ -58,10 +58,14 @@ struct DicomScan
 {
   size_t                                         DicomFiles{ 0 };
   std::map<std::string, std::vector<DicomSlice>> Series;
+  /** Files on which the DICOM parser died, each with how, e.g. "a.dcm (the DICOM parser
+   * aborted on it)". They are counted among the DICOM files. */
+  std::vector<std::string> Damaged;
 };
 
 /** Scans the headers of files (DICOMDIRs are told apart from their file meta header
- * alone, before GDCM parses their data set). */
+ * alone, before GDCM parses their data set) in a child process, so that a file on which
+ * the parser aborts is only reported (ParseInChildProcess). */
 DicomScan
 ScanDicomFiles(const std::vector<std::string> & files);
 

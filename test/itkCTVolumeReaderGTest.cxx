@@ -886,6 +886,32 @@ TEST(CTVolumeReader, TruncatedSliceIsRefusedAndRegionsAvoidingItStillRead)
   ExpectSameImage(Crop(Read(kPhilips), box), Read(roi));
 }
 
+TEST(CTVolumeReader, FileOnWhichTheDicomParserAbortsIsSkippedOrRefusedByName)
+{
+  // A slice damaged by the fuzzer whose file meta header trips an assertion in GDCM's
+  // scanner (the process aborted before the header scan ran in a child process).
+  const std::string damaged = std::string(VU_TEST_DATA_DIR) + "/fuzz/vuFuzzDicomSeries/found-meta-header-assertion.dcm";
+  ASSERT_TRUE(fs::exists(damaged));
+  const std::string directory = TemporaryDirectory();
+  CopyPhilips(directory);
+  fs::copy_file(damaged, directory + "/ZZ_damaged");
+  auto                     reader = MakeReader(directory);
+  const ImageType::Pointer image = Read(reader);
+  EXPECT_EQ(image->GetLargestPossibleRegion().GetSize(), (ImageType::SizeType{ { 512, 512, 28 } }));
+  bool warned = false;
+  for (const std::string & w : reader->GetWarnings())
+  {
+    warned = warned || (Contains(w, "skipped the damaged file") && Contains(w, "ZZ_damaged") && Contains(w, "aborted"));
+  }
+  EXPECT_TRUE(warned);
+
+  const std::string alone = TemporaryDirectory();
+  fs::copy_file(damaged, alone + "/slice.dcm");
+  const std::string message = Refusal(alone);
+  EXPECT_TRUE(Contains(message, "slice.dcm (the DICOM parser aborted on it)")) << message;
+  EXPECT_TRUE(Contains(Refusal(damaged), "the DICOM parser aborted on it")) << Refusal(damaged);
+}
+
 TEST(CTVolumeReader, RegionOfInterestEqualsCropOfFullVolume)
 {
   const ImageType::Pointer    full = Read(kPhilips);

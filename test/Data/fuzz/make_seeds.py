@@ -2,7 +2,9 @@
 """Writes the seed corpora of the fuzz targets (test/fuzz/): small valid inputs of every
 format a parser reads, from which the fuzzers mutate. Run from anywhere; rewrites the
 folders beside this script. The DICOM seeds are slices of the tilted CT series in
-test/Data/dicom/tilted_ct (license there)."""
+test/Data/dicom/tilted_ct (license there). Files named found-* are inputs the fuzzers
+found that once crashed or hung a parser, kept so that every replay tries them again
+(the DICOM ones are mutations of those slices, under the same license)."""
 import gzip
 import io
 import pathlib
@@ -16,9 +18,13 @@ HERE = pathlib.Path(__file__).resolve().parent
 
 
 def folder(name):
+    """A target's seed folder, emptied but for the inputs the fuzzers found ("found-*":
+    kept as regression seeds, each a mutation of a seed written here)."""
     path = HERE / name
-    shutil.rmtree(path, ignore_errors=True)
-    path.mkdir()
+    path.mkdir(exist_ok=True)
+    for entry in path.iterdir():
+        if not entry.name.startswith("found-"):
+            shutil.rmtree(entry) if entry.is_dir() else entry.unlink()
     return path
 
 
