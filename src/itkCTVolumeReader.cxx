@@ -213,6 +213,12 @@ CTVolumeReader::ExamineFiles(const std::vector<std::string> & listed, const std:
   {
     for (const std::string & f : listed)
     {
+      // Asking ITK's image formats whether they read a file hands it to libtiff first.
+      const std::string tiffProblem = TiffDirectoryProblem(f);
+      if (!tiffProblem.empty())
+      {
+        throw std::runtime_error(tiffProblem);
+      }
       if (ImageIOFactory::CreateImageIO(f.c_str(), ImageIOFactory::IOFileModeEnum::ReadMode).IsNotNull())
       {
         images.push_back(f);

@@ -31,6 +31,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <regex>
+#include <set>
 #include <sstream>
 
 namespace itk {
@@ -304,9 +305,16 @@ TiffDirectoryProblem(const std::string & file)
   std::error_code error;
   const uint64_t  size = fs::file_size(file, error);
   // libtiff allocates and clears what a directory entry claims before reading it.
-  uint64_t offset = u32(header + 4);
-  for (int directory = 0; directory < 4096 && offset != 0; ++directory)
+  uint64_t           offset = u32(header + 4);
+  std::set<uint64_t> visited;
+  while (offset != 0)
   {
+    // libtiff counts directories by following the chain; a chain back to a directory it
+    // has passed, by an offset it does not recognise, never ends.
+    if (!visited.insert(offset).second || visited.size() > 65535)
+    {
+      return "cannot read " + file + ": its TIFF directories form a loop";
+    }
     unsigned char count[2];
     in.seekg(static_cast<std::streamoff>(offset));
     if (offset + 2 > size || !in.read(reinterpret_cast<char *>(count), 2))

@@ -91,7 +91,14 @@ LimitChild(const std::vector<std::string> & files)
   inUse *= static_cast<uintmax_t>(sysconf(_SC_PAGESIZE));
   struct rlimit limit
   {};
-  if (getrlimit(RLIMIT_AS, &limit) == 0)
+#if defined(__SANITIZE_ADDRESS__)
+  // AddressSanitizer reserves terabytes of address space for its shadow memory: its own
+  // allocator limits what one allocation may take instead (allocator_may_return_null).
+  const bool limitAddressSpace = false;
+#else
+  const bool limitAddressSpace = true;
+#endif
+  if (limitAddressSpace && getrlimit(RLIMIT_AS, &limit) == 0)
   {
     const rlim_t wanted = static_cast<rlim_t>(inUse + 8 * largest + (uintmax_t{ 256 } << 20));
     if (limit.rlim_cur == RLIM_INFINITY || wanted < limit.rlim_cur)

@@ -60,6 +60,15 @@ def complete_unwrap(folder):
     return None
 
 
+def unwrap_completes(tool, volume, out, what):
+    """Runs unwrap to `out`; returns the problem ("WHAT failed: ..." or an incomplete
+    output), or None when the whole result is there."""
+    result = run(tool, ["unwrap", volume, "-o", out, "-q"])
+    if result.returncode != 0:
+        return "%s failed: %s" % (what, result.stderr)
+    return complete_unwrap(out)
+
+
 def unwrap_killed(tool, volume, work, sig, stage, delay):
     """Runs unwrap and sends sig `delay` seconds after the stage starts; returns the
     process's exit status."""
@@ -128,15 +137,11 @@ def kill_test(tool, work):
         if left:
             failures.append("%s during %s left %s" % (sig.name, stage, left))
     # The next complete run: the whole result, nothing stale beside it.
-    result = run(tool, ["unwrap", volume, "-o", os.path.join(work, "out"), "-q"])
-    if result.returncode != 0:
-        failures.append("unwrap after the kills failed: " + result.stderr)
-    else:
-        problem = complete_unwrap(os.path.join(work, "out"))
-        if problem:
-            failures.append(problem)
-        if leftovers(work, "out") != ["out"]:
-            failures.append("stale staging folders remain: %s" % leftovers(work, "out"))
+    problem = unwrap_completes(tool, volume, os.path.join(work, "out"), "unwrap after the kills")
+    if problem:
+        failures.append(problem)
+    elif leftovers(work, "out") != ["out"]:
+        failures.append("stale staging folders remain: %s" % leftovers(work, "out"))
     # The phantom writer, terminated while it writes its series.
     process = subprocess.Popen([tool, "phantom", "standard", "-o", os.path.join(work, "ph2")],
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
@@ -193,15 +198,11 @@ def disk_test(tool, work):
         # The same unwrap with room enough completes: the check asks for what is needed.
         subprocess.run(["umount", mount], check=True)
         subprocess.run(["mount", "-t", "tmpfs", "-o", "size=48m", "tmpfs", mount], check=True)
-        result = run(tool, ["unwrap", volume, "-o", os.path.join(mount, "out"), "-q"])
-        if result.returncode != 0:
-            failures.append("unwrap with 48 MiB free failed: " + result.stderr)
+        problem = unwrap_completes(tool, volume, os.path.join(mount, "out"), "unwrap with 48 MiB free")
+        if problem:
+            failures.append(problem)
         else:
-            problem = complete_unwrap(os.path.join(mount, "out"))
-            if problem:
-                failures.append(problem)
-            else:
-                print("unwrap with 48 MiB free: complete")
+            print("unwrap with 48 MiB free: complete")
     finally:
         subprocess.run(["umount", mount])
     return failures
