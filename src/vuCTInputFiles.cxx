@@ -218,6 +218,7 @@ MetaImageHeaderProblem(const std::string & file)
   std::ifstream in(file, std::ios::binary);
   std::string   line;
   long          dimensions = -1;
+  std::string   compressedSize;
   // MetaIO reads as many numbers per field as NDims says, whatever the file holds: a
   // negative or huge NDims makes it read for hours. The header ends at ElementDataFile.
   for (size_t read = 0; read < (1u << 20) && std::getline(in, line); read += line.size() + 1)
@@ -266,8 +267,28 @@ MetaImageHeaderProblem(const std::string & file)
                std::to_string(dimensions);
       }
     }
+    else if (key == "CompressedDataSize")
+    {
+      compressedSize = value;
+    }
     else if (key == "ElementDataFile")
     {
+      // MetaIO allocates what CompressedDataSize says before reading the data file.
+      if (!compressedSize.empty() && value.find('%') == std::string::npos && value.find(' ') == std::string::npos &&
+          value != "LIST")
+      {
+        const fs::path  data = value == "LOCAL" ? fs::path(file) : fs::path(file).parent_path() / value;
+        std::error_code error;
+        const uintmax_t size = fs::file_size(data, error);
+        char *          end = nullptr;
+        const double    claimed = std::strtod(compressedSize.c_str(), &end);
+        if (end == compressedSize.c_str() || Trim(end) != "" || !(claimed >= 0.0) ||
+            claimed > static_cast<double>(error ? 0 : size))
+        {
+          return "cannot read " + file + ": CompressedDataSize '" + compressedSize + "' is more than the " +
+                 std::to_string(error ? 0 : size) + " bytes of its data file";
+        }
+      }
       // A file-name pattern (name%03d.raw first last step) goes to printf with one int:
       // one %d it may have, any other conversion would read what is not there.
       static const std::regex pattern("[^%]*(%0?[0-9]*d[^%]*)?( .*)?");
@@ -459,7 +480,7 @@ std::string
 MetaImageTruncation(const std::string & file, ImageIOBase * io)
 {
   auto * meta = dynamic_cast<MetaImageIO *>(io);
-  if (meta == nullptr || meta->GetMetaImagePointer()->CompressedData())
+  if (meta == nullptr)
   {
     return {};
   }
@@ -471,6 +492,16 @@ MetaImageTruncation(const std::string & file, ImageIOBase * io)
   const fs::path  data = dataName == "LOCAL" ? fs::path(file) : fs::path(file).parent_path() / dataName;
   std::error_code error;
   const uintmax_t size = fs::file_size(data, error);
+  if (meta->GetMetaImagePointer()->CompressedData())
+  {
+    // zlib compresses at best about 1000 to 1: a larger image is not in the file.
+    if (!error && static_cast<double>(io->GetImageSizeInBytes()) > 1100.0 * static_cast<double>(size) + 65536.0)
+    {
+      return "cannot read " + file + ": its compressed data file " + data.string() + " of " + std::to_string(size) +
+             " bytes cannot hold an image of " + std::to_string(io->GetImageSizeInBytes()) + " bytes";
+    }
+    return {};
+  }
   if (error || size < static_cast<uintmax_t>(io->GetImageSizeInBytes()))
   {
     return "cannot read " + file + ": its data file " + data.string() + " holds " + std::to_string(error ? 0 : size) +

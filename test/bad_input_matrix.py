@@ -80,6 +80,13 @@ def main():
     truncated = mha(w("in", "truncated.mha"), (12, 12, 12), raw=b"\0" * 1000)
     huge = mha(w("in", "huge.mha"), (12, 12, 12), claim=(200000, 200000, 200000), raw=b"\0" * 64)
     garbage = write(w("in", "garbage.mha"), bytes(range(256)) * 8)
+    compressed_header = ("ObjectType = Image\nNDims = 3\nDimSize = %s\nElementType = MET_SHORT\n"
+                         "CompressedData = True\n%sElementDataFile = LOCAL\n")
+    huge_compressed_size = write(w("in", "huge_compressed_size.mha"),
+                                 (compressed_header % ("6 5 4", "CompressedDataSize = 9223372036854775808\n"))
+                                 .encode() + bytes(64))
+    huge_inflation = write(w("in", "huge_inflation.mha"),
+                           (compressed_header % ("6000 5000 4000", "")).encode() + bytes(64))
     text = write(w("in", "notes.txt"), "not a volume\n")
     empty_file = write(w("in", "empty.nrrd"), b"")
     os.makedirs(w("in", "empty_dir"))
@@ -116,6 +123,8 @@ def main():
         ("info empty file", ["info", empty_file], "(cannot read|empty|no reader|format)"),
         ("info garbage mha", ["info", garbage], "(cannot read|header|format|MetaImage)"),
         ("info truncated mha", ["info", truncated], "(cannot read|short|truncated|size|bytes)"),
+        ("info CompressedDataSize beyond the file", ["info", huge_compressed_size], "CompressedDataSize"),
+        ("info compressed data too small for its image", ["info", huge_inflation], "cannot hold an image"),
         ("info header claims 8e15 voxels", ["info", huge], "(too large|voxels|memory|size|cannot read|bytes)"),
         ("info zero spacing", ["info", zero_spacing], "spacing"),
         ("info 2D image", ["info", flat_2d], "(single 2D|2D|one slice|3D)"),
