@@ -20,6 +20,7 @@
 
 #include "itkImageIOFactory.h"
 #include "itkMetaImageIO.h"
+#include "itk_zlib.h"
 
 #include "gdcmImageReader.h"
 #include "gdcmReader.h"
@@ -476,6 +477,69 @@ ReadImageHeader(const std::string & file)
   return io;
 }
 
+namespace {
+// Where the data of a MetaImage with ElementDataFile = LOCAL begins: after that line.
+uintmax_t
+LocalDataOffset(const std::string & file)
+{
+  std::ifstream in(file, std::ios::binary);
+  std::string   line;
+  while (std::getline(in, line))
+  {
+    if (Trim(line.c_str()).rfind("ElementDataFile", 0) == 0)
+    {
+      return static_cast<uintmax_t>(in.tellg());
+    }
+  }
+  return 0;
+}
+
+// Why a zlib or gzip stream from `offset` of `file` does not inflate to `bytes`, or "".
+// MetaIO's inflation loop never ends on some damaged streams, so the stream is inflated
+// once here first, into a small buffer that is thrown away.
+std::string
+CompressedStreamProblem(const std::string & file, uintmax_t offset, uintmax_t bytes)
+{
+  std::ifstream in(file, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(offset));
+  z_stream stream{};
+  if (!in || inflateInit2(&stream, 15 + 32) != Z_OK)
+  {
+    return "cannot read " + file + ": its compressed data cannot be opened";
+  }
+  std::vector<unsigned char> input(1u << 16), output(1u << 16);
+  int                        status = Z_OK;
+  while (stream.total_out < bytes && status == Z_OK)
+  {
+    if (stream.avail_in == 0)
+    {
+      in.read(reinterpret_cast<char *>(input.data()), static_cast<std::streamsize>(input.size()));
+      stream.next_in = input.data();
+      stream.avail_in = static_cast<uInt>(in.gcount());
+      if (stream.avail_in == 0)
+      {
+        break;
+      }
+    }
+    stream.next_out = output.data();
+    stream.avail_out = static_cast<uInt>(output.size());
+    status = inflate(&stream, Z_NO_FLUSH);
+    if (status == Z_BUF_ERROR)
+    {
+      status = Z_OK; // no progress possible with this input: more is read
+    }
+  }
+  const uintmax_t inflated = stream.total_out;
+  inflateEnd(&stream);
+  if (inflated < bytes)
+  {
+    return "cannot read " + file + ": its compressed data is damaged (it inflates to " + std::to_string(inflated) +
+           " of the " + std::to_string(bytes) + " bytes of the image)";
+  }
+  return {};
+}
+} // namespace
+
 std::string
 MetaImageTruncation(const std::string & file, ImageIOBase * io)
 {
@@ -500,7 +564,9 @@ MetaImageTruncation(const std::string & file, ImageIOBase * io)
       return "cannot read " + file + ": its compressed data file " + data.string() + " of " + std::to_string(size) +
              " bytes cannot hold an image of " + std::to_string(io->GetImageSizeInBytes()) + " bytes";
     }
-    return {};
+    return CompressedStreamProblem(data.string(),
+                                   dataName == "LOCAL" ? LocalDataOffset(file) : 0,
+                                   static_cast<uintmax_t>(io->GetImageSizeInBytes()));
   }
   if (error || size < static_cast<uintmax_t>(io->GetImageSizeInBytes()))
   {

@@ -41,6 +41,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <regex>
 
 namespace vu {
 namespace {
@@ -277,6 +278,46 @@ ReadLegacyVtk(const std::string & path)
   fail("no POLYGONS");
   return sheet;
 }
+// Why VTK's XML reader cannot be given a file, or "": it sizes its arrays from the
+// counts the XML claims (NumberOfPoints, NumberOfComponents, ...) and loops over them
+// whatever the file holds. Each value takes at least one byte of the file, or of its
+// compressed data at zlib's best ratio (about 1000 to 1).
+std::string
+VtkXmlCountProblem(const std::string & path)
+{
+  std::ifstream in(path, std::ios::binary);
+  std::string   text(1u << 20, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<size_t>(in.gcount()));
+  const size_t appended = text.find("<AppendedData");
+  if (appended != std::string::npos)
+  {
+    text.resize(appended);
+  }
+  std::error_code         error;
+  const double            size = static_cast<double>(std::filesystem::file_size(path, error));
+  const double            holds = 1100.0 * size + 65536.0;
+  static const std::regex count(
+    R"re(\b(NumberOf(?:Points|Polys|Cells|Verts|Lines|Strips|Components|Tuples))\s*=\s*"([^"]*)")re");
+  double points = 0.0;
+  for (auto m = std::sregex_iterator(text.begin(), text.end(), count); m != std::sregex_iterator(); ++m)
+  {
+    const std::string name = (*m)[1];
+    const std::string value = (*m)[2];
+    char *            end = nullptr;
+    const double      n = std::strtod(value.c_str(), &end);
+    if (end == value.c_str() || *end != '\0' || !(n >= 0.0) || n != std::floor(n) ||
+        (name == "NumberOfComponents" && n > 64.0) || n > holds || (name == "NumberOfComponents" && n * points > holds))
+    {
+      return path + ": " + name + "=\"" + value + "\" is more than the file can hold";
+    }
+    if (name == "NumberOfPoints")
+    {
+      points = n;
+    }
+  }
+  return {};
+}
 } // namespace
 
 itk::SheetMesh
@@ -297,6 +338,11 @@ ReadSheetMesh(const std::string & path)
   }
   else if (extension == ".vtp")
   {
+    const std::string problem = VtkXmlCountProblem(path);
+    if (!problem.empty())
+    {
+      throw UsageError(problem);
+    }
     vtkNew<vtkXMLPolyDataReader> reader;
     reader->SetFileName(path.c_str());
     reader->Update();
