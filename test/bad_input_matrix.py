@@ -100,6 +100,12 @@ def main():
     with open(victim, "r+b") as handle:
         handle.truncate(os.path.getsize(victim) // 3)
     empty_obj = write(w("in", "empty.obj"), "")
+    # Found by fuzzing: a VTK XML mesh claiming 42949672963 components a point.
+    with open(os.path.join(data, "fuzz", "vuFuzzMeshReader", "found-vtp-huge-components"), "rb") as f:
+        huge_vtp = write(w("in", "huge_components.vtp"), f.read())
+    # Found by fuzzing: compressed MetaImage data on which MetaIO's inflation never ends.
+    with open(os.path.join(data, "fuzz", "vuFuzzImageFile", "found-inflate-loop"), "rb") as f:
+        damaged_stream = write(w("in", "damaged_stream.mha"), f.read())
     nan_obj = quad_obj(w("in", "nan_vertex.obj"), vertices=["0 0 0", "1 0 0", "nan 1 0", "1 1 0"])
     inf_obj = quad_obj(w("in", "inf_vertex.obj"), vertices=["0 0 0", "1 0 0", "0 inf 0", "1 1 0"])
     short_obj = quad_obj(w("in", "short_vertex.obj"), vertices=["0 0 0", "1 0", "0 1 0", "1 1 0"])
@@ -125,6 +131,7 @@ def main():
         ("info truncated mha", ["info", truncated], "(cannot read|short|truncated|size|bytes)"),
         ("info CompressedDataSize beyond the file", ["info", huge_compressed_size], "CompressedDataSize"),
         ("info compressed data too small for its image", ["info", huge_inflation], "cannot hold an image"),
+        ("info damaged compressed data", ["info", damaged_stream], "(compressed data is damaged|cannot read)"),
         ("info header claims 8e15 voxels", ["info", huge], "(too large|voxels|memory|size|cannot read|bytes)"),
         ("info zero spacing", ["info", zero_spacing], "spacing"),
         ("info 2D image", ["info", flat_2d], "(single 2D|2D|one slice|3D)"),
@@ -166,6 +173,8 @@ def main():
          "--restitution"),
         # flatten and distortion: meshes.
         ("flatten empty OBJ", ["flatten", empty_obj, "-o", out("f_empty.obj")], "no points"),
+        ("flatten VTK XML claiming 4e10 components", ["flatten", huge_vtp, "-o", out("f_huge.obj")],
+         "NumberOfComponents"),
         ("flatten NaN vertex", ["flatten", nan_obj, "-o", out("f_nan.obj")], ":3: vertex 3 has a non-finite"),
         ("flatten infinite vertex", ["flatten", inf_obj, "-o", out("f_inf.obj")], ":3: vertex 3 has a non-finite"),
         ("flatten vertex with two coordinates", ["flatten", short_obj, "-o", out("f_short.obj")],
