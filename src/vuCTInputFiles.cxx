@@ -238,6 +238,26 @@ MetaImageHeaderProblem(const std::string & file)
     }
     const std::string key = Trim(line.substr(0, equals).c_str());
     const std::string value = Trim(line.substr(equals + 1).c_str());
+    // MetaIO copies a text value into 255 bytes as well (only lists of numbers, such as
+    // a TransformMatrix, are read otherwise).
+    if (value.size() >= 255)
+    {
+      std::istringstream tokens(value);
+      std::string        token;
+      bool               numbers = true;
+      while (numbers && tokens >> token)
+      {
+        char * end = nullptr;
+        std::strtod(token.c_str(), &end);
+        numbers = end != token.c_str() && *end == '\0';
+      }
+      if (!numbers || key == "ObjectType" || key == "ObjectSubType" || key == "Name" || key == "Comment" ||
+          key == "ElementDataFile" || key == "ElementType" || key == "AnatomicalOrientation")
+      {
+        return "cannot read " + file + ": the value of " + key.substr(0, 40) + " has " + std::to_string(value.size()) +
+               " characters, more than a MetaImage field holds";
+      }
+    }
     if (key == "NDims")
     {
       char * end = nullptr;
