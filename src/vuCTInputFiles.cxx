@@ -494,6 +494,29 @@ ReadImageHeader(const std::string & file)
   {
     throw std::runtime_error("cannot read " + file + ": " + e.GetDescription());
   }
+  // The reader inverts the direction matrix by a singular value decomposition, which
+  // never ends on entries near the largest double; a direction is a rotation.
+  for (unsigned i = 0; i < io->GetNumberOfDimensions(); ++i)
+  {
+    double length = 0.0;
+    for (const double d : io->GetDirection(i))
+    {
+      if (!std::isfinite(d) || std::abs(d) > 1e3)
+      {
+        throw std::runtime_error("cannot read " + file + ": its direction matrix holds " + std::to_string(d) +
+                                 ", not a rotation");
+      }
+      length += d * d;
+    }
+    if (!(length > 1e-12))
+    {
+      throw std::runtime_error("cannot read " + file + ": its direction matrix has a zero column, not a rotation");
+    }
+    if (!std::isfinite(io->GetOrigin(i)))
+    {
+      throw std::runtime_error("cannot read " + file + ": its origin is not finite");
+    }
+  }
   return io;
 }
 
