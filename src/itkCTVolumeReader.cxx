@@ -211,17 +211,19 @@ CTVolumeReader::ExamineFiles(const std::vector<std::string> & listed, const std:
   }
   else if (images.empty())
   {
-    for (const std::string & f : listed)
+    // Asking ITK's image formats whether they read a file hands it to libtiff and others:
+    // they are asked in a child process, and a damaged TIFF is refused by name.
+    const std::vector<std::string> problems = ProbeHeaders(listed);
+    for (size_t i = 0; i < listed.size(); ++i)
     {
-      // Asking ITK's image formats whether they read a file hands it to libtiff first.
-      const std::string tiffProblem = TiffDirectoryProblem(f);
+      const std::string tiffProblem = TiffDirectoryProblem(listed[i]);
       if (!tiffProblem.empty())
       {
         throw std::runtime_error(tiffProblem);
       }
-      if (ImageIOFactory::CreateImageIO(f.c_str(), ImageIOFactory::IOFileModeEnum::ReadMode).IsNotNull())
+      if (problems[i].empty())
       {
-        images.push_back(f);
+        images.push_back(listed[i]);
       }
     }
   }
@@ -474,6 +476,13 @@ CTVolumeReader::ExamineSliceStack(std::vector<std::string> files)
     this->ExamineVolumeFile(files.front());
     return;
   }
+  for (const std::string & problem : ProbeHeaders(files))
+  {
+    if (!problem.empty())
+    {
+      throw std::runtime_error(problem);
+    }
+  }
   ImageIOBase::Pointer reference = ReadImageHeader(files.front());
   for (const std::string & file : files)
   {
@@ -507,6 +516,11 @@ CTVolumeReader::ExamineSliceStack(std::vector<std::string> files)
 void
 CTVolumeReader::ExamineVolumeFile(const std::string & file)
 {
+  const std::string problem = ProbeHeaders({ file }).front();
+  if (!problem.empty())
+  {
+    throw std::runtime_error(problem);
+  }
   ImageIOBase::Pointer io = ReadImageHeader(file);
   const unsigned       dimensions = io->GetNumberOfDimensions();
   if (dimensions < 3 || io->GetDimensions(2) < 2)

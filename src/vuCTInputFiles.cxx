@@ -430,7 +430,8 @@ TiffDirectoryProblem(const std::string & file)
     // libtiff and ITK size their buffers from the image's claimed size: an uncompressed
     // image cannot be larger than its file, a compressed one not more than the best ratio
     // of TIFF's lossless codecs (deflate, about 1000:1) times it.
-    const double pixelBytes = static_cast<double>(width) * static_cast<double>(length) * static_cast<double>(samples) *
+    const double pixelBytes = static_cast<double>(std::max<uint64_t>(width, 1)) *
+                              static_cast<double>(std::max<uint64_t>(length, 1)) * static_cast<double>(samples) *
                               static_cast<double>(bits) / 8.0;
     const double holds = compression == 1 ? static_cast<double>(size) : 1100.0 * static_cast<double>(size) + 65536.0;
     if (pixelBytes > holds)
@@ -458,6 +459,27 @@ TiffDirectoryProblem(const std::string & file)
     offset = u32(&table[12u * entries]);
   }
   return {};
+}
+
+std::vector<std::string>
+ProbeHeaders(const std::vector<std::string> & files)
+{
+  const IsolatedParse run = ParseInChildProcess(files, [](const std::string & file) {
+    try
+    {
+      ReadImageHeader(file);
+    }
+    catch (const std::exception & e)
+    {
+      return std::string(e.what()).empty() ? std::string("cannot read ") + file : std::string(e.what());
+    }
+    return std::string();
+  });
+  if (!run.FailedFile.empty())
+  {
+    throw std::runtime_error(run.FailedFile + " is damaged: the image reader " + run.Failure + " on its header");
+  }
+  return run.Results;
 }
 
 ImageIOBase::Pointer

@@ -103,6 +103,15 @@ MetaImageHeaderProblem(const std::string & file);
 std::string
 TiffDirectoryProblem(const std::string & file);
 
+/** Reads the headers of image files first in a child process with limits
+ * (ParseInChildProcess): for each file, "" when ReadImageHeader reads it there, or why not.
+ * Throws, naming the file and how the child died, when a format's library aborts or never
+ * ends on a header (libtiff's directory reading has done both); a header that asks for
+ * more memory than the child may take fails there with an error instead, so the caller
+ * must not read a file with an error again in its own process. */
+std::vector<std::string>
+ProbeHeaders(const std::vector<std::string> & files);
+
 /** Reads the header of an image file (a MetaImage or a TIFF checked first), or says why
  * it cannot. */
 ImageIOBase::Pointer
