@@ -33,13 +33,15 @@
 namespace itk {
 namespace detail {
 namespace {
+// Moves `bytes` through `fd` with read or write, resuming after interruptions and short
+// transfers; false when the other end is gone.
+template <typename Transfer, typename Pointer>
 bool
-WriteAll(int fd, const void * data, size_t bytes)
+TransferAll(Transfer transfer, int fd, Pointer data, size_t bytes)
 {
-  const char * p = static_cast<const char *>(data);
   while (bytes > 0)
   {
-    const ssize_t n = write(fd, p, bytes);
+    const ssize_t n = transfer(fd, data, bytes);
     if (n < 0 && errno == EINTR)
     {
       continue;
@@ -48,31 +50,22 @@ WriteAll(int fd, const void * data, size_t bytes)
     {
       return false;
     }
-    p += n;
+    data += n;
     bytes -= static_cast<size_t>(n);
   }
   return true;
 }
 
 bool
+WriteAll(int fd, const void * data, size_t bytes)
+{
+  return TransferAll(write, fd, static_cast<const char *>(data), bytes);
+}
+
+bool
 ReadAll(int fd, void * data, size_t bytes)
 {
-  char * p = static_cast<char *>(data);
-  while (bytes > 0)
-  {
-    const ssize_t n = read(fd, p, bytes);
-    if (n < 0 && errno == EINTR)
-    {
-      continue;
-    }
-    if (n <= 0)
-    {
-      return false;
-    }
-    p += n;
-    bytes -= static_cast<size_t>(n);
-  }
-  return true;
+  return TransferAll(read, fd, static_cast<char *>(data), bytes);
 }
 
 void

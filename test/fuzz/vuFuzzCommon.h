@@ -23,6 +23,7 @@
 #ifndef vuFuzzCommon_h
 #define vuFuzzCommon_h
 
+#include "itkCTVolumeReader.h"
 #include "itkObject.h"
 
 #include <vtkObject.h>
@@ -87,6 +88,22 @@ Quiet()
 }
 
 /** True when the bytes start with the given text. */
+/** Reads `path` (a file, folder or pattern) as `unwrap` does; a refusal is the expected
+ * answer to most inputs (the tool prints its message in one line). */
+inline void
+ReadVolume(const std::string & path)
+{
+  try
+  {
+    auto reader = itk::CTVolumeReader::New();
+    reader->SetFileName(path);
+    reader->UpdateOutputInformation();
+    reader->Update();
+  }
+  catch (const std::exception &)
+  {}
+}
+
 inline bool
 StartsWith(const uint8_t * data, size_t size, const std::string & text)
 {

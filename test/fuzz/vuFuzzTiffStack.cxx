@@ -25,7 +25,6 @@
 // '_'), then the bytes of the first file.
 #include "vuFuzzCommon.h"
 
-#include "itkCTVolumeReader.h"
 #include "itkImageFileWriter.h"
 
 #include <algorithm>
@@ -121,16 +120,6 @@ LLVMFuzzerTestOneInput(const uint8_t * data, size_t size)
     }
     ++files;
   }
-  try
-  {
-    auto reader = itk::CTVolumeReader::New();
-    reader->SetFileName(glob ? (folder / pattern).string() : folder.string());
-    reader->UpdateOutputInformation();
-    reader->Update();
-  }
-  catch (const std::exception &)
-  {
-    // Refused: the tool prints the message in one line.
-  }
+  ReadVolume(glob ? (folder / pattern).string() : folder.string());
   return 0;
 }
