@@ -657,6 +657,14 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
       }
       m_Report.TurnSpacing = roll.Pitch;
       m_Report.Turns = roll.Slices[nz / 2].Turns;
+      if (roll.Incomplete > 0)
+      {
+        std::ostringstream text;
+        text << roll.Incomplete
+             << " slice(s) traced only in part (their trace ends far from the other slices' ends: the sheet's edge "
+                "along the axis, or a trace lost before the end) were left out or interpolated";
+        m_Report.Warnings.push_back(text.str());
+      }
       for (const auto & [slice, turn] : roll.Disagreements)
       {
         m_Report.LayerJumps.push_back({ slice, turn });
@@ -831,7 +839,7 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
   const double automatic = std::max(
     voxel, std::sqrt(8.0 * m_Report.MinimumCurvatureRadius * parameters.ChordErrorFraction * m_Report.SheetThickness));
   const double hs = parameters.SpacingAlongSheet > 0.0 ? parameters.SpacingAlongSheet : automatic;
-  const double hw = parameters.SpacingAlongAxis > 0.0 ? parameters.SpacingAlongAxis : std::max(hs, sz);
+  double       hw = parameters.SpacingAlongAxis > 0.0 ? parameters.SpacingAlongAxis : std::max(hs, sz);
 
   // A slice shorter or longer than the median by a sizeable part of a column would shear
   // the grid: the columns sit at the same fraction of every slice's length.
@@ -957,6 +965,37 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
     std::ostringstream text;
     text << m_Report.InterpolatedSlices << " slice(s) inside the sheet could not be traced and were interpolated";
     m_Report.Warnings.push_back(text.str());
+  }
+  // Along the axis the sheet bends too (a radius that changes along the roll, a skewed
+  // end): rows far apart, joined by straight edges, would cut through the gaps between
+  // turns. The automatic row spacing h is the largest (at most the one above) at which the
+  // curves of the slices deviate from the chord between slices h apart by no more than the
+  // chord error f t, above the deviation the noise of the traces makes between neighbouring
+  // slices (95th percentile over columns and slices).
+  if (!(parameters.SpacingAlongAxis > 0.0) && lastGood - firstGood >= 4)
+  {
+    auto deviation = [&](long d) {
+      std::vector<double> values;
+      const size_t        stride = std::max<size_t>(1, columns / 200);
+      for (long k = firstGood + d; k + d <= lastGood; k += std::max(1L, d / 2))
+      {
+        for (size_t c = 0; c < columns; c += stride)
+        {
+          const double ex = 0.5 * (columnsOf[k - d][2 * c] + columnsOf[k + d][2 * c]) - columnsOf[k][2 * c];
+          const double ey = 0.5 * (columnsOf[k - d][2 * c + 1] + columnsOf[k + d][2 * c + 1]) - columnsOf[k][2 * c + 1];
+          values.push_back(std::hypot(ex, ey));
+        }
+      }
+      return values.empty() ? 0.0 : Percentile(values, 0.95);
+    };
+    const double noise = deviation(1);
+    const double tolerance = parameters.ChordErrorFraction * std::max(m_Report.SheetThickness, voxel);
+    auto         half = static_cast<long>(std::floor(0.5 * hw / sz));
+    while (half >= 2 && 2 * half <= lastGood - firstGood && deviation(half) > noise + tolerance)
+    {
+      half = static_cast<long>(std::floor(0.75 * static_cast<double>(half)));
+    }
+    hw = std::max(sz, std::min(hw, 2.0 * static_cast<double>(std::max(half, 1L)) * sz));
   }
   const double tilt = std::atan(std::hypot(m_Report.AxisSlope[0], m_Report.AxisSlope[1])) * 180.0 / Pi;
   if (method == SheetSurfaceMethodEnum::Roll && tilt > 2.0)

@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 namespace itk {
@@ -362,13 +363,27 @@ public:
     const double heldWithPrior = std::max(30.0 * voxel, 2.0 * m_Pitch);
     const double heldAlone = std::max(4.0 * voxel, 1.0 * m_Pitch);
     const long   maximumSteps = m_Frame.Rays * (static_cast<long>(std::ceil(m_Frame.RMax / m_Pitch)) + 2);
+    // Radius at every step taken so far (NaN where none was found): the turn traced one
+    // revolution before is the best predictor of the shape of this one (an ellipse, an
+    // irregular section), offset by the distance between the two.
+    std::vector<double> radiusAt{ rho };
+    auto                turnBefore = [&](long step) {
+      return step >= m_Frame.Rays ? radiusAt[static_cast<size_t>(step - m_Frame.Rays)]
+                                                 : std::numeric_limits<double>::quiet_NaN();
+    };
+    double turnOffset = 0.0;
+    bool   turnKnown = false;
     for (long step = 1; step < maximumSteps; ++step)
     {
+      radiusAt.push_back(std::numeric_limits<double>::quiet_NaN());
       const long   m = start + dir * step;
       const auto   a = static_cast<size_t>(((m % m_Frame.Rays) + m_Frame.Rays) % m_Frame.Rays);
       const Step & last = confirmed.back();
       const bool   guided = prior != nullptr && prior->Covers(m);
-      const double predicted = guided ? prior->At(m) + offset : last.Rho + slope * static_cast<double>(m - last.M);
+      const double below = turnBefore(step);
+      const double predicted = guided                              ? prior->At(m) + offset
+                               : turnKnown && std::isfinite(below) ? below + turnOffset
+                                                                   : last.Rho + slope * static_cast<double>(m - last.M);
       if (predicted <= 0.0 || predicted > m_Frame.RMax)
       {
         break;
@@ -412,8 +427,25 @@ public:
         const double r = list[best].Radius;
         steps.push_back({ m, r, true });
         confirmed.push_back({ m, r, true });
+        radiusAt.back() = r;
         missedArc = heldArc = 0.0;
         const size_t count = std::min<size_t>(12, confirmed.size());
+        {
+          // Mean distance to the turn before over the last confirmed steps that have one.
+          double sum = 0.0;
+          size_t used = 0;
+          for (size_t q = confirmed.size() - count; q < confirmed.size(); ++q)
+          {
+            const double under = turnBefore(dir * (confirmed[q].M - start));
+            if (std::isfinite(under))
+            {
+              sum += confirmed[q].Rho - under;
+              ++used;
+            }
+          }
+          turnKnown = used >= count / 2 && used > 0;
+          turnOffset = used > 0 ? sum / static_cast<double>(used) : 0.0;
+        }
         if (guided)
         {
           // Mean offset from the prior over the last confirmed steps it covers.
@@ -454,14 +486,15 @@ public:
       const bool   outside = !slice.Inside(x, y);
       if (outside || slice.Value(x, y, m_Settings.AirLevel) >= material)
       {
-        // Material (or the edge of the field of view) without a separate crossing: carry
-        // the prediction through.
-        heldArc += predicted * m_Frame.Step;
-        if (heldArc > (guided || outside ? heldWithPrior : heldAlone))
+        // Material without a separate crossing, or the sheet out of the field of view
+        // (for as long as it stays out): carry the prediction through.
+        heldArc += outside ? 0.0 : predicted * m_Frame.Step;
+        if (heldArc > (guided ? heldWithPrior : heldAlone))
         {
           break;
         }
         steps.push_back({ m, predicted, false });
+        radiusAt.back() = predicted;
       }
       else
       {
@@ -661,7 +694,7 @@ public:
       line,
       [&](double x, double y) { return sampler.Value(x, y, m_Settings.AirLevel) >= material; },
       m_Settings.Voxel,
-      std::max(m_Width, m_Settings.Voxel) + 2.0 * m_Settings.Voxel);
+      0.5 * std::max(m_Width, m_Settings.Voxel) + m_Settings.Voxel);
     return line;
   }
 
@@ -792,6 +825,117 @@ MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
       }
     }
   }
+}
+// A sheet's cut edges run along the roll axis in a straight or slowly drifting line: the
+// ends of the traces, as functions of the slice, are fitted by lines over the middle 60 %
+// of the slices, and a trace whose end lies further than DropTolerance of arc from its
+// line (a slice that cuts the sheet's edge along the axis, faint and blurred; a trace lost
+// before the end) is dropped: the mesh interpolates that slice from its neighbours, or
+// ends before it.
+constexpr double DropTolerance = 8.0; // voxels
+
+size_t
+DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
+                     const std::vector<size_t> &  slices,
+                     const PolarFrame &           frame,
+                     double                       voxel)
+{
+  const size_t n = slices.size();
+  if (n < 5)
+  {
+    return 0;
+  }
+  // Least-squares line of (slice, end) over the middle traces, refitted once without the
+  // ones further than the tolerance.
+  auto fit = [&](int end, double line[2]) {
+    std::vector<char> use(n, 0);
+    for (size_t i = n / 5; i < n - n / 5; ++i)
+    {
+      use[i] = traces[slices[i]].Empty() ? 0 : 1;
+    }
+    for (int pass = 0; pass < 2; ++pass)
+    {
+      double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, count = 0.0;
+      for (size_t i = 0; i < n; ++i)
+      {
+        if (use[i] != 0)
+        {
+          const auto   x = static_cast<double>(i);
+          const auto & t = traces[slices[i]];
+          const auto   y = static_cast<double>(end == 0 ? t.First : t.Last());
+          sx += x;
+          sy += y;
+          sxx += x * x;
+          sxy += x * y;
+          count += 1.0;
+        }
+      }
+      if (count < 3.0)
+      {
+        return false;
+      }
+      const double denominator = count * sxx - sx * sx;
+      line[1] = denominator > 0.0 ? (count * sxy - sx * sy) / denominator : 0.0;
+      line[0] = (sy - line[1] * sx) / count;
+      for (size_t i = 0; i < n && pass == 0; ++i)
+      {
+        const auto & t = traces[slices[i]];
+        if (use[i] != 0)
+        {
+          const long   m = end == 0 ? t.First : t.Last();
+          const double tolerance = DropTolerance * voxel / (std::max(voxel, t.At(m)) * frame.Step);
+          use[i] = std::abs(static_cast<double>(m) - line[0] - line[1] * static_cast<double>(i)) <= tolerance ? 1 : 0;
+        }
+      }
+    }
+    return true;
+  };
+  double firstLine[2], lastLine[2];
+  if (!fit(0, firstLine) || !fit(1, lastLine))
+  {
+    return 0;
+  }
+  size_t dropped = 0;
+  for (size_t i = 0; i < n; ++i)
+  {
+    auto & t = traces[slices[i]];
+    if (t.Empty())
+    {
+      continue;
+    }
+    const auto x = static_cast<double>(i);
+    bool       incomplete = false;
+    for (int end = 0; end < 2; ++end)
+    {
+      const long     m = end == 0 ? t.First : t.Last();
+      const double * line = end == 0 ? firstLine : lastLine;
+      const double   tolerance = DropTolerance * voxel / (std::max(voxel, t.At(m)) * frame.Step);
+      incomplete = incomplete || std::abs(static_cast<double>(m) - line[0] - line[1] * x) > tolerance;
+    }
+    if (incomplete)
+    {
+      t = Tracer::Trace{};
+      ++dropped;
+    }
+  }
+  return dropped;
+}
+
+// Slices in a row whose traces may be dropped for disagreeing with the last kept one.
+constexpr long MaximumRejected = 8;
+
+// First angular index at which two traces differ by more than half the turn spacing (-1: none).
+long
+FirstDisagreement(const Tracer::Trace & a, const Tracer::Trace & b, double pitch)
+{
+  for (long m = std::max(a.First, b.First); m <= std::min(a.Last(), b.Last()); ++m)
+  {
+    if (std::abs(a.At(m) - b.At(m)) > 0.5 * pitch)
+    {
+      return m;
+    }
+  }
+  return -1;
 }
 } // namespace
 
@@ -942,6 +1086,7 @@ TraceRoll(const SheetVolumeView &             volume,
   for (int dir : { +1, -1 })
   {
     Tracer::Trace prior = seedTrace;
+    long          rejected = 0;
     for (long q = dir > 0 ? seedIndex : seedIndex - 1; q >= 0 && q < static_cast<long>(material.size());)
     {
       std::vector<size_t> slices;
@@ -955,10 +1100,22 @@ TraceRoll(const SheetVolumeView &             volume,
       for (size_t i = 0; i < slices.size(); ++i)
       {
         traces[slices[i]] = tracer.TraceGuided(found[i], slices[i], prior);
-        if (!traces[slices[i]].Empty())
+        if (traces[slices[i]].Empty())
         {
-          prior = traces[slices[i]];
+          continue;
         }
+        // A trace that leaves its prior by half a turn spacing somewhere has lost or jumped
+        // a turn (noise, a streak, a faint stretch): it is dropped (the slice is then
+        // interpolated from its neighbours) and the prior carried on, unless the slices
+        // keep disagreeing with it for longer than a few slices (the sheet itself changed).
+        if (FirstDisagreement(prior, traces[slices[i]], tracer.Pitch()) >= 0 && rejected < MaximumRejected)
+        {
+          traces[slices[i]] = Tracer::Trace{};
+          ++rejected;
+          continue;
+        }
+        rejected = 0;
+        prior = traces[slices[i]];
       }
       q += dir * static_cast<long>(slices.size());
       done += slices.size();
@@ -967,6 +1124,7 @@ TraceRoll(const SheetVolumeView &             volume,
   }
 
   MatchEndsToNeighbours(traces, material, tracer.Frame(), settings.Voxel);
+  result.Incomplete = DropIncompleteTraces(traces, material, tracer.Frame(), settings.Voxel);
 
   // Neighbouring traces that disagree by half a turn spacing at the same angle: a turn
   // was lost or jumped between them.
@@ -978,14 +1136,11 @@ TraceRoll(const SheetVolumeView &             volume,
     {
       continue;
     }
-    for (long m = std::max(a.First, b.First); m <= std::min(a.Last(), b.Last()); ++m)
+    const long m = FirstDisagreement(a, b, result.Pitch);
+    if (m >= 0)
     {
-      if (std::abs(a.At(m) - b.At(m)) > 0.5 * result.Pitch)
-      {
-        result.Disagreements.emplace_back(material[i],
-                                          static_cast<double>(m - b.First) / static_cast<double>(tracer.Frame().Rays));
-        break;
-      }
+      result.Disagreements.emplace_back(material[i],
+                                        static_cast<double>(m - b.First) / static_cast<double>(tracer.Frame().Rays));
     }
   }
   for (size_t k : material)

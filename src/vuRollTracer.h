@@ -68,6 +68,9 @@ struct Result
   double RayThickness{ 0.0 };
   /** Spiral centre relative to the centroid line (mm), applied to every slice. */
   double CentreOffset[2]{ 0.0, 0.0 };
+  /** Slices whose trace ended far from the line of the other slices' ends (the sheet's
+   * edge along the axis, a trace lost before the end): dropped, to be interpolated. */
+  size_t Incomplete{ 0 };
   /** Where neighbouring slices' traces disagree by more than half a turn: slice, turn. */
   std::vector<std::pair<size_t, double>> Disagreements;
 };
