@@ -341,15 +341,17 @@ public:
   };
 
   // Follows the spiral from (start, rho) in direction dir (+1: counter-clockwise), with the
-  // trace of the neighbouring slice as prior where it has one.
+  // trace of the neighbouring slice as prior where it has one. `opposite` holds the steps
+  // already followed from the same start the other way: the turn next to the first one.
   std::vector<Step>
-  Follow(const SliceCrossings & crossings,
-         const ValueSlice &     slice,
-         const double           centre[2],
-         const Trace *          prior,
-         long                   start,
-         double                 rho,
-         int                    dir) const
+  Follow(const SliceCrossings &    crossings,
+         const ValueSlice &        slice,
+         const double              centre[2],
+         const Trace *             prior,
+         long                      start,
+         double                    rho,
+         int                       dir,
+         const std::vector<Step> & opposite = {}) const
   {
     const double      voxel = m_Settings.Voxel;
     const double      material = m_Settings.AirLevel + MaterialLevel * m_Contrast;
@@ -367,12 +369,22 @@ public:
     // revolution before is the best predictor of the shape of this one (an ellipse, an
     // irregular section), offset by the distance between the two.
     std::vector<double> radiusAt{ rho };
-    auto                turnBefore = [&](long step) {
+    std::vector<double> oppositeAt(static_cast<size_t>(m_Frame.Rays), std::numeric_limits<double>::quiet_NaN());
+    for (const Step & o : opposite)
+    {
+      const long back = dir * (start - o.M); // steps taken the other way
+      if (back > 0 && back <= m_Frame.Rays)
+      {
+        oppositeAt[static_cast<size_t>(m_Frame.Rays - back)] = o.Rho;
+      }
+    }
+    auto turnBefore = [&](long step) {
       return step >= m_Frame.Rays ? radiusAt[static_cast<size_t>(step - m_Frame.Rays)]
-                                                 : std::numeric_limits<double>::quiet_NaN();
+                                  : oppositeAt[static_cast<size_t>(step)];
     };
-    double turnOffset = 0.0;
-    bool   turnKnown = false;
+    double              turnOffset = 0.0;
+    bool                turnKnown = false;
+    std::vector<double> distances;
     for (long step = 1; step < maximumSteps; ++step)
     {
       radiusAt.push_back(std::numeric_limits<double>::quiet_NaN());
@@ -389,21 +401,27 @@ public:
         break;
       }
       const auto & list = crossings.Rays[a];
-      const auto   it = std::lower_bound(
-        list.begin(), list.end(), predicted, [](const Crossing & c, double r) { return c.Radius < r; });
-      size_t best = list.size();
-      double bestDistance = m_Frame.RMax;
-      for (auto candidate : { it, it == list.begin() ? list.end() : it - 1 })
-      {
-        if (candidate != list.end() && std::abs(candidate->Radius - predicted) < bestDistance)
+      // The crossing nearest a prediction, if it is near enough to it (and to the last
+      // accepted radius) and not on the turn traced one revolution before (the trace would
+      // circle); list.size() otherwise.
+      auto accept = [&](double target) {
+        const auto it =
+          std::lower_bound(list.begin(), list.end(), target, [](const Crossing & c, double r) { return c.Radius < r; });
+        size_t best = list.size();
+        double bestDistance = m_Frame.RMax;
+        for (auto candidate : { it, it == list.begin() ? list.end() : it - 1 })
         {
-          bestDistance = std::abs(candidate->Radius - predicted);
-          best = static_cast<size_t>(candidate - list.begin());
+          if (candidate != list.end() && std::abs(candidate->Radius - target) < bestDistance)
+          {
+            bestDistance = std::abs(candidate->Radius - target);
+            best = static_cast<size_t>(candidate - list.begin());
+          }
         }
-      }
-      double spacing = m_Pitch;
-      if (best < list.size())
-      {
+        if (best == list.size())
+        {
+          return best;
+        }
+        double spacing = m_Pitch;
         if (best > 0)
         {
           spacing = std::min(spacing, list[best].Radius - list[best - 1].Radius);
@@ -412,17 +430,27 @@ public:
         {
           spacing = std::min(spacing, list[best + 1].Radius - list[best].Radius);
         }
-      }
-      if (guided)
-      {
-        const double priorSpacing = TraceSpacing(*prior, m);
-        if (priorSpacing > 0.0)
+        if (guided)
         {
-          spacing = std::min(spacing, priorSpacing);
+          const double priorSpacing = TraceSpacing(*prior, m);
+          if (priorSpacing > 0.0)
+          {
+            spacing = std::min(spacing, priorSpacing);
+          }
         }
+        const double window = AcceptWindow * std::max(spacing, voxel);
+        const double apart = 0.6 * std::max(m_Width, voxel);
+        const bool   near = bestDistance < window && (guided || std::abs(list[best].Radius - last.Rho) < window);
+        const bool   circling = std::isfinite(below) && std::abs(list[best].Radius - below) < apart;
+        return near && !circling ? best : list.size();
+      };
+      size_t best = accept(predicted);
+      if (best == list.size() && !guided && turnKnown && std::isfinite(below))
+      {
+        // The distance to the turn before changes (uneven winding): continue the radius.
+        best = accept(last.Rho + slope * static_cast<double>(m - last.M));
       }
-      const double window = AcceptWindow * std::max(spacing, voxel);
-      if (best < list.size() && bestDistance < window && (guided || std::abs(list[best].Radius - last.Rho) < window))
+      if (best < list.size())
       {
         const double r = list[best].Radius;
         steps.push_back({ m, r, true });
@@ -430,21 +458,26 @@ public:
         radiusAt.back() = r;
         missedArc = heldArc = 0.0;
         const size_t count = std::min<size_t>(12, confirmed.size());
+        // Distance to the turn before: the median over the last eighth of a turn of
+        // confirmed steps, so that a short stretch where two turns touch (one merged
+        // crossing between them) does not pull the next prediction onto the wrong turn.
+        if (std::isfinite(below))
         {
-          // Mean distance to the turn before over the last confirmed steps that have one.
-          double sum = 0.0;
-          size_t used = 0;
-          for (size_t q = confirmed.size() - count; q < confirmed.size(); ++q)
+          distances.push_back(r - below);
+          const size_t window = std::max<size_t>(12, static_cast<size_t>(m_Frame.Rays / 8));
+          if (distances.size() <= 24 || distances.size() % 4 == 0)
           {
-            const double under = turnBefore(dir * (confirmed[q].M - start));
-            if (std::isfinite(under))
-            {
-              sum += confirmed[q].Rho - under;
-              ++used;
-            }
+            std::vector<double> recent(
+              distances.end() - static_cast<std::ptrdiff_t>(std::min(window, distances.size())), distances.end());
+            turnOffset = Median(recent);
           }
-          turnKnown = used >= count / 2 && used > 0;
-          turnOffset = used > 0 ? sum / static_cast<double>(used) : 0.0;
+          turnKnown = distances.size() >= 6;
+          // Turns lie at least a sheet apart, however tightly they touch.
+          const double least = 0.8 * std::max(m_Width, voxel);
+          if (turnKnown && std::abs(turnOffset) < least)
+          {
+            turnOffset = std::copysign(least, turnOffset);
+          }
         }
         if (guided)
         {
@@ -519,8 +552,11 @@ public:
     const ValueSlice sampler(m_Volume, m_Values, slice);
     double           c[2];
     Centre(slice, c);
-    const auto inward = Follow(crossings, sampler, c, prior, start, rho, -1);
-    const auto outward = Follow(crossings, sampler, c, prior, start, rho, +1);
+    // Each way twice: the second time with the first turn of the other way as the shape of
+    // the turn before.
+    const auto first = Follow(crossings, sampler, c, prior, start, rho, +1);
+    const auto inward = Follow(crossings, sampler, c, prior, start, rho, -1, first);
+    const auto outward = Follow(crossings, sampler, c, prior, start, rho, +1, inward);
     Trace      trace;
     trace.First = inward.empty() ? start : inward.back().M;
     const long last = outward.empty() ? start : outward.back().M;
