@@ -480,6 +480,9 @@ Circumradius(const double a[2], const double b[2], const double c[2])
   const double cross = std::abs((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
   return cross > 0.0 ? ab * bc * ca / (2.0 * cross) : std::numeric_limits<double>::infinity();
 }
+// Slices at most by which the mesh reaches past the last well-traced slice along the axis.
+constexpr long EdgeSlices = 8;
+
 } // namespace
 
 SheetMesh
@@ -1005,12 +1008,26 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
     m_Report.Warnings.push_back(text.str());
   }
 
-  // Rows: triangular-weighted average of the slices within one row spacing. Where a slice
-  // beyond the first or last row holds part of the sheet (its edge along the axis), the
-  // mesh reaches half a slice further, to the middle of that slice's voxels, on the curve
-  // of the last good slice.
-  const double below = firstGood > 0 && area[firstGood - 1] > 0.0 ? 0.5 * sz : 0.0;
-  const double above = lastGood + 1 < static_cast<long>(nz) && area[lastGood + 1] > 0.0 ? 0.5 * sz : 0.0;
+  // Rows: triangular-weighted average of the slices within one row spacing. Where slices
+  // beyond the first or last good one hold the sheet (its edge along the axis), the mesh
+  // reaches over them, and half a slice further to the middle of the last one's voxels,
+  // on the curve of the last good slice.
+  // Slices beyond the good ones that still hold most of a slice's material (traces lost
+  // in the faint, blurred slices at the sheet's edge along the axis) are covered too, on
+  // the curve of the nearest good slice, up to a few slices.
+  const double fullArea = partialArea / 0.75;
+  auto         reach = [&](long from, long dir) {
+    long k = from + dir;
+    while (k >= 0 && k < static_cast<long>(nz) && std::abs(k - from) <= EdgeSlices && area[k] >= 0.5 * fullArea)
+    {
+      k += dir;
+    }
+    const long covered = std::abs(k - from) - 1;
+    const bool edge = k >= 0 && k < static_cast<long>(nz) && area[k] > 0.0;
+    return static_cast<double>(covered) * sz + (covered > 0 || edge ? 0.5 * sz : 0.0);
+  };
+  const double below = reach(firstGood, -1);
+  const double above = reach(lastGood, +1);
   const double span = static_cast<double>(lastGood - firstGood) * sz + below + above;
   const auto   rows = static_cast<size_t>(std::max(2.0, std::ceil(span / hw) + 1.0));
   const double rowSpacing = span / static_cast<double>(rows - 1);

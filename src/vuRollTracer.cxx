@@ -726,11 +726,6 @@ public:
     }
     const ValueSlice sampler(m_Volume, m_Values, slice);
     const double     material = m_Settings.AirLevel + MaterialLevel * m_Contrast;
-    ExtendEnds(
-      line,
-      [&](double x, double y) { return sampler.Value(x, y, m_Settings.AirLevel) >= material; },
-      m_Settings.Voxel,
-      0.5 * std::max(m_Width, m_Settings.Voxel) + m_Settings.Voxel);
     return line;
   }
 
