@@ -739,6 +739,13 @@ private:
   double                  m_Pitch{ 1.0 };
   double                  m_Width{ 1.0 };
 };
+// Angular steps that make `arc` mm along a trace at radius rho (at least a voxel).
+double
+ArcSteps(double arc, double rho, double voxel, const PolarFrame & frame)
+{
+  return arc / (std::max(voxel, rho) * frame.Step);
+}
+
 // A trace whose end strays from the median end of the slices within EndReach of it (by more
 // than EndTolerance of arc) is cut back to it or continued along its nearest neighbour
 // that reaches it: a sheet's cut edge runs straight or slowly along the roll axis, while a
@@ -779,8 +786,8 @@ MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
     }
     const auto medianFirst = static_cast<long>(Median(f)), medianLast = static_cast<long>(Median(l));
     auto       tolerance = [&](long m) {
-      const double rho = std::max(voxel, trace.Covers(m) ? trace.At(m) : voxel);
-      return static_cast<long>(std::ceil(EndTolerance * voxel / (rho * frame.Step)));
+      return static_cast<long>(
+        std::ceil(ArcSteps(EndTolerance * voxel, trace.Covers(m) ? trace.At(m) : voxel, voxel, frame)));
     };
     // Cut back.
     if (trace.Last() > medianLast + tolerance(medianLast) && medianLast > trace.First)
@@ -914,7 +921,7 @@ DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
         if (use[i] != 0)
         {
           const long   m = end == 0 ? t.First : t.Last();
-          const double tolerance = DropTolerance * voxel / (std::max(voxel, t.At(m)) * frame.Step);
+          const double tolerance = ArcSteps(DropTolerance * voxel, t.At(m), voxel, frame);
           use[i] = std::abs(static_cast<double>(m) - line[0] - line[1] * static_cast<double>(i)) <= tolerance ? 1 : 0;
         }
       }
@@ -940,7 +947,7 @@ DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
     {
       const long     m = end == 0 ? t.First : t.Last();
       const double * line = end == 0 ? firstLine : lastLine;
-      const double   tolerance = DropTolerance * voxel / (std::max(voxel, t.At(m)) * frame.Step);
+      const double   tolerance = ArcSteps(DropTolerance * voxel, t.At(m), voxel, frame);
       incomplete = incomplete || std::abs(static_cast<double>(m) - line[0] - line[1] * x) > tolerance;
     }
     if (incomplete)
