@@ -39,6 +39,8 @@ constexpr double MaterialLevel = 0.5;
 constexpr double AcceptWindow = 0.4;
 // Slices averaged on each side of the seed slice.
 constexpr long SeedHalfWidth = 3;
+// Rays on which the seed slice's trace is started (at three depths each).
+constexpr long AloneRays = 8;
 
 double
 Median(std::vector<double> values)
@@ -522,7 +524,10 @@ public:
         // Material without a separate crossing, or the sheet out of the field of view
         // (for as long as it stays out): carry the prediction through.
         heldArc += outside ? 0.0 : predicted * m_Frame.Step;
-        if (heldArc > (guided ? heldWithPrior : heldAlone))
+        // In the seed slice (no neighbour yet) the turn before vouches for the shape as the
+        // neighbouring slice does later: a touch longer than a turn spacing is held through.
+        const bool vouched = guided || (prior == nullptr && turnKnown && std::isfinite(below));
+        if (heldArc > (vouched ? heldWithPrior : heldAlone))
         {
           break;
         }
@@ -601,19 +606,33 @@ public:
   Trace
   TraceAlone(const SliceCrossings & crossings, size_t slice) const
   {
-    std::vector<std::pair<size_t, long>> counts;
-    for (long a = 0; a < m_Frame.Rays; ++a)
+    // A trace from one crossing can go wrong at its first hard place (a touch, a streak, an
+    // artefact's circle) and lose the rest of the roll: starts on several rays and at
+    // several depths, and the trace that passes through most crossings wins.
+    Trace  best;
+    double bestExplained = -1.0;
+    for (long k = 0; k < AloneRays; ++k)
     {
-      counts.emplace_back(crossings.Rays[static_cast<size_t>(a)].size(), a);
+      const long          ray = k * m_Frame.Rays / AloneRays;
+      const auto &        list = crossings.Rays[static_cast<size_t>(ray)];
+      std::vector<size_t> depths{ list.size() / 4, list.size() / 2, (3 * list.size()) / 4 };
+      depths.erase(std::unique(depths.begin(), depths.end()), depths.end());
+      for (size_t q : depths)
+      {
+        if (q >= list.size())
+        {
+          continue;
+        }
+        Trace        trace = TraceFrom(crossings, slice, nullptr, ray, list[q].Radius);
+        const double explained = trace.Empty() ? 0.0 : Explained(crossings, trace);
+        if (!trace.Empty() && explained > bestExplained)
+        {
+          best = std::move(trace);
+          bestExplained = explained;
+        }
+      }
     }
-    std::nth_element(counts.begin(), counts.begin() + static_cast<std::ptrdiff_t>(counts.size() / 2), counts.end());
-    const auto [count, ray] = counts[counts.size() / 2];
-    if (count == 0)
-    {
-      return {};
-    }
-    const double rho = crossings.Rays[static_cast<size_t>(ray)][count / 2].Radius;
-    return TraceFrom(crossings, slice, nullptr, ray, rho);
+    return best;
   }
 
   // Trace guided by a neighbouring slice's trace: starts where the prior meets a crossing,
@@ -724,8 +743,6 @@ public:
       line[2 * i] = c[0] + rho * std::cos(angle);
       line[2 * i + 1] = c[1] + rho * std::sin(angle);
     }
-    const ValueSlice sampler(m_Volume, m_Values, slice);
-    const double     material = m_Settings.AirLevel + MaterialLevel * m_Contrast;
     return line;
   }
 
