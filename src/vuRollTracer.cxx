@@ -54,6 +54,30 @@ Median(std::vector<double> values)
   return *middle;
 }
 
+// Least-squares line y = intercept + slope x through the points added.
+struct LineFit
+{
+  double SX{ 0.0 }, SY{ 0.0 }, SXX{ 0.0 }, SXY{ 0.0 }, N{ 0.0 };
+  void
+  Add(double x, double y)
+  {
+    SX += x;
+    SY += y;
+    SXX += x * x;
+    SXY += x * y;
+    N += 1.0;
+  }
+  // False (slope 0 through the mean) when the points do not span two x.
+  bool
+  Solve(double & intercept, double & slope) const
+  {
+    const double denominator = N * SXX - SX * SX;
+    slope = denominator > 0.0 ? (N * SXY - SX * SY) / denominator : 0.0;
+    intercept = N > 0.0 ? (SY - slope * SX) / N : 0.0;
+    return denominator > 0.0;
+  }
+};
+
 // Bilinear samples of one slice of the intensities (mm of the view's frame).
 class ValueSlice
 {
@@ -499,19 +523,15 @@ public:
         if (count >= 3)
         {
           // Least-squares slope of the radius per step along the trace direction.
-          double sx = 0, sy = 0, sxx = 0, sxy = 0;
+          LineFit fit;
           for (size_t q = confirmed.size() - count; q < confirmed.size(); ++q)
           {
-            const auto x = static_cast<double>(confirmed[q].M);
-            sx += x;
-            sy += confirmed[q].Rho;
-            sxx += x * x;
-            sxy += x * confirmed[q].Rho;
+            fit.Add(static_cast<double>(confirmed[q].M), confirmed[q].Rho);
           }
-          const double denominator = static_cast<double>(count) * sxx - sx * sx;
-          if (denominator > 0.0)
+          double intercept = 0.0, fitted = 0.0;
+          if (fit.Solve(intercept, fitted))
           {
-            slope = std::clamp((static_cast<double>(count) * sxy - sx * sy) / denominator, -maximumSlope, maximumSlope);
+            slope = std::clamp(fitted, -maximumSlope, maximumSlope);
           }
         }
         continue;
@@ -900,6 +920,15 @@ DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
   {
     return 0;
   }
+  // The angular index of a trace's inner (end 0) or outer (end 1) end, and whether it lies
+  // further than the tolerance from a line of (slice, end).
+  auto endOf = [](const Tracer::Trace & t, int end) { return end == 0 ? t.First : t.Last(); };
+  auto offLine = [&](size_t i, int end, const double line[2]) {
+    const Tracer::Trace & t = traces[slices[i]];
+    const long            m = endOf(t, end);
+    const double          tolerance = ArcSteps(DropTolerance * voxel, t.At(m), voxel, frame);
+    return std::abs(static_cast<double>(m) - line[0] - line[1] * static_cast<double>(i)) > tolerance;
+  };
   // Least-squares line of (slice, end) over the middle traces, refitted once without the
   // ones further than the tolerance.
   auto fit = [&](int end, double line[2]) {
@@ -910,37 +939,22 @@ DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
     }
     for (int pass = 0; pass < 2; ++pass)
     {
-      double sx = 0.0, sy = 0.0, sxx = 0.0, sxy = 0.0, count = 0.0;
+      LineFit points;
       for (size_t i = 0; i < n; ++i)
       {
         if (use[i] != 0)
         {
-          const auto   x = static_cast<double>(i);
-          const auto & t = traces[slices[i]];
-          const auto   y = static_cast<double>(end == 0 ? t.First : t.Last());
-          sx += x;
-          sy += y;
-          sxx += x * x;
-          sxy += x * y;
-          count += 1.0;
+          points.Add(static_cast<double>(i), static_cast<double>(endOf(traces[slices[i]], end)));
         }
       }
-      if (count < 3.0)
+      if (points.N < 3.0)
       {
         return false;
       }
-      const double denominator = count * sxx - sx * sx;
-      line[1] = denominator > 0.0 ? (count * sxy - sx * sy) / denominator : 0.0;
-      line[0] = (sy - line[1] * sx) / count;
+      points.Solve(line[0], line[1]);
       for (size_t i = 0; i < n && pass == 0; ++i)
       {
-        const auto & t = traces[slices[i]];
-        if (use[i] != 0)
-        {
-          const long   m = end == 0 ? t.First : t.Last();
-          const double tolerance = ArcSteps(DropTolerance * voxel, t.At(m), voxel, frame);
-          use[i] = std::abs(static_cast<double>(m) - line[0] - line[1] * static_cast<double>(i)) <= tolerance ? 1 : 0;
-        }
+        use[i] = use[i] != 0 && !offLine(i, end, line) ? 1 : 0;
       }
     }
     return true;
@@ -953,23 +967,9 @@ DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
   size_t dropped = 0;
   for (size_t i = 0; i < n; ++i)
   {
-    auto & t = traces[slices[i]];
-    if (t.Empty())
+    if (!traces[slices[i]].Empty() && (offLine(i, 0, firstLine) || offLine(i, 1, lastLine)))
     {
-      continue;
-    }
-    const auto x = static_cast<double>(i);
-    bool       incomplete = false;
-    for (int end = 0; end < 2; ++end)
-    {
-      const long     m = end == 0 ? t.First : t.Last();
-      const double * line = end == 0 ? firstLine : lastLine;
-      const double   tolerance = ArcSteps(DropTolerance * voxel, t.At(m), voxel, frame);
-      incomplete = incomplete || std::abs(static_cast<double>(m) - line[0] - line[1] * x) > tolerance;
-    }
-    if (incomplete)
-    {
-      t = Tracer::Trace{};
+      traces[slices[i]] = Tracer::Trace{};
       ++dropped;
     }
   }
