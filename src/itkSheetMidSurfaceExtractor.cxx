@@ -220,6 +220,53 @@ SampleAtArcLengths(const Polyline & line, const std::vector<double> & arcs)
   return out;
 }
 
+// Increasing arc lengths brought within [0, length]: the columns that fall beyond an end
+// are spread evenly between that end and the first column inside, so that no column is
+// placed on the straight continuation of an end segment (off the sheet where it curves,
+// as a roll's inner end does) and no two columns coincide.
+std::vector<double>
+KeepWithinTrace(std::vector<double> arcs, double length)
+{
+  const size_t n = arcs.size();
+  if (n < 2 || !(length > 0.0))
+  {
+    return arcs;
+  }
+  // Fewer than two columns inside (a fit far off): the columns at even fractions instead.
+  const auto even = [&] {
+    for (size_t c = 0; c < n; ++c)
+    {
+      arcs[c] = length * static_cast<double>(c) / static_cast<double>(n - 1);
+    }
+    return arcs;
+  };
+  size_t first = 0;
+  while (first < n && arcs[first] < 0.0)
+  {
+    ++first;
+  }
+  size_t last = n;
+  while (last > first && arcs[last - 1] > length)
+  {
+    --last;
+  }
+  if (last - first < 2)
+  {
+    return even();
+  }
+  for (size_t c = 0; c < first; ++c)
+  {
+    arcs[c] = arcs[first] * static_cast<double>(c) / static_cast<double>(first);
+  }
+  const size_t beyond = n - last;
+  for (size_t c = 1; c <= beyond; ++c)
+  {
+    arcs[last - 1 + c] =
+      arcs[last - 1] + (length - arcs[last - 1]) * static_cast<double>(c) / static_cast<double>(beyond);
+  }
+  return arcs;
+}
+
 // Bilinear sampling of one slice of the volume, in mm of the view's frame.
 class SliceSampler
 {
@@ -936,7 +983,7 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
         arcs[c] = lengths[k] * static_cast<double>(c) / static_cast<double>(columns - 1) - intercept -
                   slope * static_cast<double>(c);
       }
-      aligned[k] = SampleAtArcLengths(traces[k], arcs);
+      aligned[k] = SampleAtArcLengths(traces[k], KeepWithinTrace(arcs, lengths[k]));
     }
     columnsOf = std::move(aligned);
   }

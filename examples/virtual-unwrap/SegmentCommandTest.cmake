@@ -32,7 +32,7 @@ if(NOT method STREQUAL "general" OR points LESS 100 OR threshold LESS -900 OR th
                       "spacing along the axis ${along}")
 endif()
 
-vu_expect_failure(segment missing "volume not found" ${WORK}/nothere.mha -o ${WORK}/bad)
+vu_expect_failure(segment missing "no such file or directory" ${WORK}/nothere.mha -o ${WORK}/bad)
 vu_expect_failure(segment threshold "nothing at or above the threshold" ${WORK}/phantom/volume.mha -o ${WORK}/bad
   --threshold 9000)
 vu_expect_failure(segment spacing "--mesh-spacing must be a number" ${WORK}/phantom/volume.mha -o ${WORK}/bad

@@ -17,6 +17,7 @@
  *=========================================================================*/
 // virtual-unwrap segment VOLUME -o DIR: sheet mask, mid-surface mesh and a JSON summary.
 #include "vuCommands.h"
+#include "vuReaderOptions.h"
 
 #include "itkCTVolumeReader.h"
 
@@ -44,6 +45,7 @@ struct SegmentOptions
   double        ChordError{ 0.1 };
   unsigned long MinimumComponent{ 100 };
   unsigned int  Closing{ 0 };
+  ReaderOptions Reader;
 };
 
 // "auto" or a number; anything else is the user's mistake.
@@ -100,29 +102,28 @@ RunSegment(const SegmentOptions & options)
   using VolumeType = itk::Image<float, 3>;
   using MaskType = itk::Image<unsigned char, 3>;
   using MeshType = itk::Mesh<float, 3>;
-  if (!std::filesystem::exists(options.Volume))
-  {
-    throw UsageError("volume not found: " + options.Volume);
-  }
   double     threshold = 0.0, spacing[2] = { 0.0, 0.0 };
   const bool fixedThreshold = ParseAutoOrNumber(options.Threshold, "--threshold", threshold);
   ParseMeshSpacing(options.MeshSpacing, spacing);
   const itk::SheetSurfaceMethodEnum method = itk::SheetSurfaceMethodFromString(options.Method);
   const auto                        start = std::chrono::steady_clock::now();
 
-  // The CT reader, as unwrap reads: headers checked before ITK's readers see them.
+  // The CT reader with unwrap's options (spacing, region, series, geometry corrections):
+  // headers checked before ITK's readers see them; voxels without data filled as unwrap
+  // fills them for segmentation and meshing.
   auto reader = itk::CTVolumeReader::New();
-  reader->SetFileName(options.Volume);
+  ConfigureReader(options.Reader, options.Volume, *reader);
   reader->Update();
-  auto segmentation = itk::SheetSegmentationImageFilter<VolumeType, MaskType>::New();
-  segmentation->SetInput(reader->GetOutput());
+  const FilledVolume filled = FillVoxelsWithoutData(reader->GetOutput());
+  auto               segmentation = itk::SheetSegmentationImageFilter<VolumeType, MaskType>::New();
+  segmentation->SetInput(filled.Volume);
   segmentation->SetAutomaticThreshold(!fixedThreshold);
   segmentation->SetThreshold(threshold);
   segmentation->SetMinimumComponentSize(options.MinimumComponent);
   segmentation->SetClosingRadius(options.Closing);
   auto surface = itk::SheetMidSurfaceMeshFilter<MaskType, MeshType>::New();
   surface->SetInput(segmentation->GetOutput());
-  surface->SetIntensityImage(reader->GetOutput());
+  surface->SetIntensityImage(filled.Volume);
   surface->SetMethod(method);
   surface->SetSpacingAlongSheet(spacing[0]);
   surface->SetSpacingAlongAxis(spacing[1]);
@@ -158,6 +159,8 @@ RunSegment(const SegmentOptions & options)
   const itk::SheetMidSurfaceReport & report = surface->GetReport();
   nlohmann::json                     json;
   json["volume"] = options.Volume;
+  json["geometry_corrections"] = GeometryCorrectionsJson(*reader);
+  json["voxels_without_data"] = filled.Filled;
   json["threshold"] = { { "value", segmentation->GetThreshold() }, { "automatic", !fixedThreshold } };
   json["components_kept"] = segmentation->GetNumberOfComponents();
   json["method"] = itk::ToString(report.Method);
@@ -265,6 +268,7 @@ RegisterSegmentCommand(CLI::App & app)
   command->add_option("--min-component", options.MinimumComponent, "remove components smaller than this (voxels)")
     ->capture_default_str();
   command->add_option("--closing", options.Closing, "binary closing radius in voxels (0: off)")->capture_default_str();
+  AddReaderOptions(*command, options.Reader);
   command->callback([] { RunSegment(options); });
 }
 } // namespace vu

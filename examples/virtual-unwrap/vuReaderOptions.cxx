@@ -182,7 +182,7 @@ FillVoxelsWithoutData(itk::CTVolumeReader::OutputImageType * volume)
   const float * values = volume->GetBufferPointer();
   const size_t  count = volume->GetBufferedRegion().GetNumberOfPixels();
   result.Filled =
-    static_cast<itk::SizeValueType>(std::count_if(values, values + count, [](float v) { return !std::isfinite(v); }));
+    static_cast<itk::SizeValueType>(std::count_if(values, values + count, [](float v) { return std::isnan(v); }));
   if (result.Filled == 0 || result.Filled == count)
   {
     return result;
@@ -209,7 +209,7 @@ FillVoxelsWithoutData(itk::CTVolumeReader::OutputImageType * volume)
   result.Volume = duplicator->GetOutput();
   float * filled = result.Volume->GetBufferPointer();
   std::replace_if(
-    filled, filled + count, [](float v) { return !std::isfinite(v); }, static_cast<float>(result.Value));
+    filled, filled + count, [](float v) { return std::isnan(v); }, static_cast<float>(result.Value));
   return result;
 }
 } // namespace vu
