@@ -39,8 +39,9 @@ struct IsolatedParse
 /** Parses files with a third-party parser that may abort the process on a damaged file
  * (Debian's GDCM keeps its assertions) or allocate and clear whatever length a file claims:
  * `parse` runs on each file in turn in a child process whose address space is limited to
- * what it uses now plus eight times the largest file plus 256 MiB, and whose time is
- * limited to 10 s plus 50 ms a file. Each result comes back through a pipe; the parse
+ * what it uses now plus eight times the largest file plus 256 MiB, and whose processor
+ * time is limited to 10 s plus 50 ms a file (eight times that in a sanitizer build; four
+ * times that in wall-clock time). Each result comes back through a pipe; the parse
  * stops at the first file the child dies on. Without fork (or a pipe), `parse` runs here. */
 IsolatedParse
 ParseInChildProcess(const std::vector<std::string> &                             files,
