@@ -660,8 +660,17 @@ public:
   Trace
   TraceGuided(const SliceCrossings & crossings, size_t slice, const Trace & prior) const
   {
-    const long middle = (prior.First + prior.Last()) / 2;
-    const long reach = (prior.Last() - prior.First) / 2;
+    Trace trace = TraceNear(crossings, slice, prior, prior.First, prior.Last());
+    return trace.Empty() ? TraceAlone(crossings, slice) : trace;
+  }
+
+  // Trace from the crossing that meets the prior nearest the middle of its stretch
+  // [from, to] of angular indices; empty when no crossing there meets it.
+  Trace
+  TraceNear(const SliceCrossings & crossings, size_t slice, const Trace & prior, long from, long to) const
+  {
+    const long middle = (from + to) / 2;
+    const long reach = (to - from) / 2;
     for (long d = 0; d <= reach; ++d)
     {
       for (long m : { middle - d, middle + d })
@@ -683,7 +692,7 @@ public:
         }
       }
     }
-    return TraceAlone(crossings, slice);
+    return Trace{};
   }
 
   // Median spacing of successive crossings and median crossing width.
@@ -992,6 +1001,84 @@ FirstDisagreement(const Tracer::Trace & a, const Tracer::Trace & b, double pitch
   }
   return -1;
 }
+
+// A trace that stopped short of its prior's ends (a touch it could not pass, a faint
+// stretch, a streak) would lose the rest of the roll for every slice after it. It is traced
+// again from the prior's stretch beyond each end it stopped at more than half a turn short
+// of; a second piece that agrees with the prior is joined to it, the stretch between the
+// two (at most a turn) on the prior's curve, offset linearly from one piece's end to the
+// other's.
+void
+ResumeBeyondStops(Tracer::Trace &        trace,
+                  const Tracer::Trace &  prior,
+                  const Tracer &         tracer,
+                  const SliceCrossings & crossings,
+                  size_t                 slice)
+{
+  const long   half = tracer.Frame().Rays / 2;
+  const double pitch = tracer.Pitch();
+  for (int end : { 0, 1 })
+  {
+    if (trace.Empty())
+    {
+      return;
+    }
+    const long from = end == 0 ? prior.First : trace.Last() + half / 4;
+    const long to = end == 0 ? trace.First - half / 4 : prior.Last();
+    if ((end == 0 ? trace.First - prior.First : prior.Last() - trace.Last()) <= half || to - from < half / 2)
+    {
+      continue;
+    }
+    Tracer::Trace piece = tracer.TraceNear(crossings, slice, prior, from, to);
+    if (piece.Empty() || FirstDisagreement(prior, piece, pitch) >= 0 || FirstDisagreement(trace, piece, pitch) >= 0)
+    {
+      continue;
+    }
+    const Tracer::Trace & inner = end == 0 ? piece : trace;
+    const Tracer::Trace & outer = end == 0 ? trace : piece;
+    if (piece.First <= trace.First && piece.Last() >= trace.Last())
+    {
+      trace = std::move(piece); // passed the hard place from the other side
+      continue;
+    }
+    if (outer.Last() <= inner.Last() || outer.First <= inner.First)
+    {
+      continue; // the trace holds the piece
+    }
+    Tracer::Trace joined;
+    joined.First = inner.First;
+    joined.Rho.assign(static_cast<size_t>(outer.Last() - inner.First + 1), 0.0);
+    joined.Confirmed.assign(joined.Rho.size(), 0);
+    const long gapFrom = inner.Last() + 1, gapTo = outer.First - 1;
+    if (gapFrom <= gapTo &&
+        (!(prior.Covers(gapFrom - 1) && prior.Covers(gapTo + 1)) || gapTo - gapFrom >= tracer.Frame().Rays))
+    {
+      continue; // a trace started away from the prior, or more than a turn to bridge
+    }
+    const double before = gapFrom <= gapTo ? inner.At(inner.Last()) - prior.At(inner.Last()) : 0.0;
+    const double after = gapFrom <= gapTo ? outer.At(outer.First) - prior.At(outer.First) : 0.0;
+    for (long m = joined.First; m <= joined.Last(); ++m)
+    {
+      const auto i = static_cast<size_t>(m - joined.First);
+      if (inner.Covers(m))
+      {
+        joined.Rho[i] = inner.At(m);
+        joined.Confirmed[i] = inner.Confirmed[static_cast<size_t>(m - inner.First)];
+      }
+      else if (outer.Covers(m))
+      {
+        joined.Rho[i] = outer.At(m);
+        joined.Confirmed[i] = outer.Confirmed[static_cast<size_t>(m - outer.First)];
+      }
+      else
+      {
+        const double t = static_cast<double>(m - gapFrom + 1) / static_cast<double>(gapTo - gapFrom + 2);
+        joined.Rho[i] = prior.At(m) + (1.0 - t) * before + t * after;
+      }
+    }
+    trace = std::move(joined);
+  }
+}
 } // namespace
 
 void
@@ -1159,6 +1246,7 @@ TraceRoll(const SheetVolumeView &             volume,
         {
           continue;
         }
+        ResumeBeyondStops(traces[slices[i]], prior, tracer, found[i], slices[i]);
         // A trace that leaves its prior by half a turn spacing somewhere has lost or jumped
         // a turn (noise, a streak, a faint stretch): it is dropped (the slice is then
         // interpolated from its neighbours) and the prior carried on, unless the slices
