@@ -89,7 +89,7 @@ LimitChild(const std::vector<std::string> & files)
   // allocator limits what one allocation may take instead (allocator_may_return_null).
   const bool limitAddressSpace = false;
 #else
-  const bool limitAddressSpace = true;
+  const bool   limitAddressSpace = true;
 #endif
   if (limitAddressSpace && getrlimit(RLIMIT_AS, &limit) == 0)
   {
