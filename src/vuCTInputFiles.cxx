@@ -372,6 +372,9 @@ TiffDirectoryProblem(const std::string & file)
     // Width, length, bits per sample, compression, samples per pixel (TIFF's defaults).
     uint64_t width = 0, length = 0, bits = 1, compression = 1, samples = 1, rowsPerStrip = 0, planar = 1;
     uint64_t tileWidth = 0, tileLength = 0;
+    // libtiff keeps the first of a tag given twice and the check here would judge another:
+    // an image's geometry is given once.
+    std::set<uint32_t> geometryTags;
     for (uint32_t e = 0; e < entries; ++e)
     {
       const unsigned char * entry = &table[12u * e];
@@ -393,6 +396,12 @@ TiffDirectoryProblem(const std::string & file)
         in.seekg(static_cast<std::streamoff>(u32(entry + 8)));
         first = in.read(reinterpret_cast<char *>(value), 2) ? u16(value) : 0;
         in.clear();
+      }
+      static const std::set<uint32_t> geometry = { 256, 257, 258, 259, 277, 278, 284, 322, 323 };
+      if (geometry.count(u16(entry)) != 0 && !geometryTags.insert(u16(entry)).second)
+      {
+        return "cannot read " + file + ": its TIFF directory gives tag " + std::to_string(u16(entry)) +
+               " (image geometry) more than once";
       }
       switch (u16(entry))
       {

@@ -106,6 +106,12 @@ def main():
     # Found by fuzzing: compressed MetaImage data on which MetaIO's inflation never ends.
     with open(os.path.join(data, "fuzz", "vuFuzzImageFile", "found-inflate-loop"), "rb") as f:
         damaged_stream = write(w("in", "damaged_stream.mha"), f.read())
+    # Found by fuzzing: a TIFF directory giving the image length twice (libtiff keeps the
+    # first, 2^32 rows, and sizes its strip table from it). The seed holds file names
+    # first, then the TIFF's bytes after a NUL byte.
+    with open(os.path.join(data, "fuzz", "vuFuzzTiffStack", "found-duplicate-length"), "rb") as f:
+        seed = f.read()
+        duplicate_length = write(w("in", "duplicate_length.tif"), seed[seed.index(b"\0", 1) + 1:])
     nan_obj = quad_obj(w("in", "nan_vertex.obj"), vertices=["0 0 0", "1 0 0", "nan 1 0", "1 1 0"])
     inf_obj = quad_obj(w("in", "inf_vertex.obj"), vertices=["0 0 0", "1 0 0", "0 inf 0", "1 1 0"])
     short_obj = quad_obj(w("in", "short_vertex.obj"), vertices=["0 0 0", "1 0", "0 1 0", "1 1 0"])
@@ -133,6 +139,7 @@ def main():
         ("info compressed data too small for its image", ["info", huge_inflation], "cannot hold an image"),
         ("info damaged compressed data", ["info", damaged_stream], "(compressed data is damaged|cannot read)"),
         ("info header claims 8e15 voxels", ["info", huge], "(too large|voxels|memory|size|cannot read|bytes)"),
+        ("info TIFF geometry tag given twice", ["info", duplicate_length], "more than once"),
         ("info zero spacing", ["info", zero_spacing], "spacing"),
         ("info 2D image", ["info", flat_2d], "(single 2D|2D|one slice|3D)"),
         ("info negative --spacing", ["info", ok_volume, "--spacing", "1", "-1", "1"], "--spacing"),
