@@ -535,7 +535,11 @@ CTVolumeReader::ExamineVolumeFile(const std::string & file)
                                "): only 3D volumes are read");
     }
   }
-  const std::string truncation = MetaImageTruncation(file, io);
+  std::string truncation = MetaImageTruncation(file, io);
+  if (truncation.empty())
+  {
+    truncation = NrrdTruncation(file, io);
+  }
   if (!truncation.empty())
   {
     throw std::runtime_error(truncation);

@@ -650,6 +650,108 @@ MetaImageTruncation(const std::string & file, ImageIOBase * io)
   return {};
 }
 
+std::string
+NrrdTruncation(const std::string & file, ImageIOBase * io)
+{
+  std::ifstream in(file, std::ios::binary);
+  std::string   line;
+  if (!std::getline(in, line) || line.rfind("NRRD", 0) != 0)
+  {
+    return {};
+  }
+  std::string encoding = "raw", dataFile;
+  bool        attached = false;
+  while (std::getline(in, line))
+  {
+    if (!line.empty() && line.back() == '\r')
+    {
+      line.pop_back();
+    }
+    if (line.empty())
+    {
+      attached = true; // the data follow the blank line
+      break;
+    }
+    const size_t colon = line.find(':');
+    if (line[0] == '#' || colon == std::string::npos)
+    {
+      continue;
+    }
+    const std::string key = Trim(line.substr(0, colon).c_str());
+    const std::string value = Trim(line.substr(colon + 1).c_str());
+    if (key == "encoding")
+    {
+      encoding = value;
+    }
+    else if (key == "data file" || key == "datafile")
+    {
+      dataFile = value;
+    }
+  }
+  std::error_code error;
+  uintmax_t       available = 0;
+  fs::path        data = file;
+  if (!dataFile.empty())
+  {
+    // A list of files or a numbered pattern: NrrdIO checks each file as it reads it.
+    if (dataFile.rfind("LIST", 0) == 0 || dataFile.find(' ') != std::string::npos)
+    {
+      return {};
+    }
+    data = fs::path(file).parent_path() / dataFile;
+    available = fs::file_size(data, error);
+  }
+  else if (attached)
+  {
+    const std::streamoff offset = in.tellg();
+    const uintmax_t      size = fs::file_size(file, error);
+    available = offset > 0 && static_cast<uintmax_t>(offset) < size ? size - static_cast<uintmax_t>(offset) : 0;
+  }
+  if (error)
+  {
+    return {}; // NrrdIO says what is missing
+  }
+  // What the data can hold at most, as bytes of the image, by encoding: raw bytes as
+  // they are, hex two characters a byte, text at least one character a value, gzip about
+  // 1000 to 1 at best, bzip2 (long runs coded as runs) far more.
+  const double bytes = static_cast<double>(available);
+  const double values = static_cast<double>(io->GetImageSizeInComponents());
+  const double needed = static_cast<double>(io->GetImageSizeInBytes());
+  bool         holds = true;
+  if (encoding == "raw")
+  {
+    holds = bytes >= needed;
+  }
+  else if (encoding == "hex")
+  {
+    holds = bytes >= 2.0 * needed;
+  }
+  else if (encoding == "txt" || encoding == "text" || encoding == "ascii")
+  {
+    holds = bytes >= values;
+  }
+  else if (encoding == "gz" || encoding == "gzip")
+  {
+    holds = 1100.0 * bytes + 65536.0 >= needed;
+  }
+  else if (encoding == "bz2" || encoding == "bzip2")
+  {
+    holds = 1e6 * bytes + 65536.0 >= needed;
+  }
+  if (holds)
+  {
+    return {};
+  }
+  std::string size;
+  for (unsigned d = 0; d < io->GetNumberOfDimensions(); ++d)
+  {
+    size += (d == 0 ? "" : " x ") + std::to_string(io->GetDimensions(d));
+  }
+  return "cannot read " + file + ": its NRRD data (" + encoding + ", " + std::to_string(available) + " bytes" +
+         (dataFile.empty() ? "" : " in " + data.string()) + ") cannot hold an image of " + size + " voxels (" +
+         std::to_string(static_cast<uintmax_t>(needed)) + " bytes)";
+}
+
 bool
 IsDicomDirectoryFile(const std::string & file)
 {

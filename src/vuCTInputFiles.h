@@ -123,6 +123,11 @@ ReadImageHeader(const std::string & file);
 std::string
 MetaImageTruncation(const std::string & file, ImageIOBase * io);
 
+/** Why a NRRD file's data cannot hold the image its header describes, or "": NrrdIO
+ * allocates the whole image its header claims before reading a byte of the data. */
+std::string
+NrrdTruncation(const std::string & file, ImageIOBase * io);
+
 /** True for a DICOMDIR (a media directory, never an image). GDCM's full parse aborts on
  * some malformed DICOMDIR files (an assertion in its fallback reader), so they are told
  * apart from their file meta header alone, before the scanner reads their data set. */

@@ -87,6 +87,9 @@ def main():
                                  .encode() + bytes(64))
     huge_inflation = write(w("in", "huge_inflation.mha"),
                            (compressed_header % ("6000 5000 4000", "")).encode() + bytes(64))
+    nrrd_header = ("NRRD0004\ntype: short\ndimension: 3\nsizes: %s\nendian: little\nencoding: %s\n\n")
+    huge_nrrd = write(w("in", "huge.nrrd"), (nrrd_header % ("60000 50000 40000", "raw")).encode() + bytes(64))
+    huge_gzip_nrrd = write(w("in", "huge_gzip.nrrd"), (nrrd_header % ("60000 50000 40000", "gzip")).encode() + bytes(64))
     text = write(w("in", "notes.txt"), "not a volume\n")
     empty_file = write(w("in", "empty.nrrd"), b"")
     os.makedirs(w("in", "empty_dir"))
@@ -140,6 +143,9 @@ def main():
         ("info damaged compressed data", ["info", damaged_stream], "(compressed data is damaged|cannot read)"),
         ("info header claims 8e15 voxels", ["info", huge], "(too large|voxels|memory|size|cannot read|bytes)"),
         ("info TIFF geometry tag given twice", ["info", duplicate_length], "more than once"),
+        ("info NRRD claims 1.2e14 voxels in 64 bytes", ["info", huge_nrrd], "cannot hold an image"),
+        ("unwrap gzip NRRD claims 1.2e14 voxels", ["unwrap", huge_gzip_nrrd, "-o", out("uw_huge_nrrd"), "-q"],
+         "cannot hold an image"),
         ("info zero spacing", ["info", zero_spacing], "spacing"),
         ("info 2D image", ["info", flat_2d], "(single 2D|2D|one slice|3D)"),
         ("info negative --spacing", ["info", ok_volume, "--spacing", "1", "-1", "1"], "--spacing"),
