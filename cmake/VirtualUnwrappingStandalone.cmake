@@ -92,7 +92,7 @@ endif()
 # from this build tree or from an installation.
 include(CMakePackageConfigHelpers)
 include(GNUInstallDirs)
-install(TARGETS VirtualUnwrapping EXPORT VirtualUnwrappingTargets
+install(TARGETS VirtualUnwrapping VirtualUnwrappingValidation EXPORT VirtualUnwrappingTargets
   LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
