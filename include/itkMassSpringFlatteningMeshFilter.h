@@ -37,16 +37,10 @@ namespace itk {
  * input's units (mm), i.e. the UV coordinates that FlattenedTextureImageFilter reads. The
  * input's point data and sheet grid are carried over.
  *
- * The work is done by MassSpringSheetFlattener (see it for the model, the phases and every
- * parameter); this filter exposes its parameters, with the same names, defaults and ranges:
- * Integrator (ImplicitEuler), TimeStep (0: automatic), StepsPerFallTime (40),
- * TimeStepSafety (0.5), Stiffness (1),
- * ShearStiffnessRatio (0.5), BendingStiffnessRatio (0: off), Density (1), Gravity
- * (0: automatic), HangingStrain (0.01), Damping (-1: automatic), SpringDamping (0),
- * Restitution (0.1, in [0, 1]), LockedEdge (OuterEdge), LockedParticles,
- * MaximumStepsPerPhase (3000), KineticEnergyTolerance (1e-9), ResidualForceTolerance
- * (1e-3), PlanarityTolerance (0.25), RelaxationIterations (300), RelaxationTolerance (1e-5), CoarseningFactor
- * (0: automatic), CoarseParticles (3000).
+ * The work is done by MassSpringSheetFlattener (see it for the model and the phases); this
+ * filter exposes its parameters with the same names, defaults and ranges: Integrator
+ * (ImplicitEuler), LockedEdge (OuterEdge), LockedParticles, and the numeric parameters
+ * listed, with their meanings, in VU_MASS_SPRING_PARAMETERS (itkMassSpringSheetFlattener.h).
  *
  * Events: an IterationEvent after every simulation step (observers may read
  * GetCurrentSystem() positions, GetCurrentPhase(), GetCurrentStep(), and may lock or unlock
@@ -76,65 +70,67 @@ public:
   using IntegratorEnum = MassSpringIntegratorEnum;
   using LockedEdgeEnum = SheetLockedEdgeEnum;
 
-  itkSetEnumMacro(Integrator, IntegratorEnum);
-  itkGetEnumMacro(Integrator, IntegratorEnum);
-  itkSetClampMacro(TimeStep, double, 0.0, NumericTraits<double>::max());
-  itkGetConstMacro(TimeStep, double);
-  itkSetClampMacro(StepsPerFallTime, double, 1e-3, NumericTraits<double>::max());
-  itkGetConstMacro(StepsPerFallTime, double);
-  itkSetClampMacro(TimeStepSafety, double, 1e-6, 100.0);
-  itkGetConstMacro(TimeStepSafety, double);
-  itkSetClampMacro(Stiffness, double, 1e-12, NumericTraits<double>::max());
-  itkGetConstMacro(Stiffness, double);
-  itkSetClampMacro(ShearStiffnessRatio, double, 0.0, NumericTraits<double>::max());
-  itkGetConstMacro(ShearStiffnessRatio, double);
-  itkSetClampMacro(BendingStiffnessRatio, double, 0.0, NumericTraits<double>::max());
-  itkGetConstMacro(BendingStiffnessRatio, double);
-  itkSetClampMacro(Density, double, 1e-12, NumericTraits<double>::max());
-  itkGetConstMacro(Density, double);
-  itkSetClampMacro(Gravity, double, 0.0, NumericTraits<double>::max());
-  itkGetConstMacro(Gravity, double);
-  itkSetClampMacro(HangingStrain, double, 1e-9, 1.0);
-  itkGetConstMacro(HangingStrain, double);
-  itkSetMacro(Damping, double);
-  itkGetConstMacro(Damping, double);
-  itkSetClampMacro(SpringDamping, double, 0.0, NumericTraits<double>::max());
-  itkGetConstMacro(SpringDamping, double);
-  itkSetClampMacro(Restitution, double, 0.0, 1.0);
-  itkGetConstMacro(Restitution, double);
-  itkSetEnumMacro(LockedEdge, LockedEdgeEnum);
-  itkGetEnumMacro(LockedEdge, LockedEdgeEnum);
-  itkSetClampMacro(MaximumStepsPerPhase, unsigned int, 1, NumericTraits<unsigned int>::max());
-  itkGetConstMacro(MaximumStepsPerPhase, unsigned int);
-  itkSetClampMacro(KineticEnergyTolerance, double, 0.0, NumericTraits<double>::max());
-  itkGetConstMacro(KineticEnergyTolerance, double);
-  itkSetClampMacro(ResidualForceTolerance, double, 0.0, NumericTraits<double>::max());
-  itkGetConstMacro(ResidualForceTolerance, double);
-  itkSetClampMacro(PlanarityTolerance, double, 1e-9, NumericTraits<double>::max());
-  itkGetConstMacro(PlanarityTolerance, double);
-  itkSetClampMacro(RelaxationIterations, unsigned int, 1, NumericTraits<unsigned int>::max());
-  itkGetConstMacro(RelaxationIterations, unsigned int);
-  itkSetClampMacro(RelaxationTolerance, double, 0.0, NumericTraits<double>::max());
-  itkGetConstMacro(RelaxationTolerance, double);
-  itkSetMacro(CoarseningFactor, unsigned int);
-  itkGetConstMacro(CoarseningFactor, unsigned int);
-  itkSetClampMacro(CoarseParticles, unsigned int, 4, NumericTraits<unsigned int>::max());
-  itkGetConstMacro(CoarseParticles, unsigned int);
+  /** Integrator of the unroll and flatten phases (ImplicitEuler). */
+  virtual void
+  SetIntegrator(const IntegratorEnum integrator)
+  {
+    if (m_Parameters.Integrator != integrator)
+    {
+      m_Parameters.Integrator = integrator;
+      this->Modified();
+    }
+  }
+  virtual IntegratorEnum
+  GetIntegrator() const
+  {
+    return m_Parameters.Integrator;
+  }
+  /** What the unroll phase holds (OuterEdge). */
+  virtual void
+  SetLockedEdge(const LockedEdgeEnum edge)
+  {
+    if (m_Parameters.LockedEdge != edge)
+    {
+      m_Parameters.LockedEdge = edge;
+      this->Modified();
+    }
+  }
+  virtual LockedEdgeEnum
+  GetLockedEdge() const
+  {
+    return m_Parameters.LockedEdge;
+  }
+
+  /** Set/Get of every numeric parameter of VU_MASS_SPRING_PARAMETERS (see there for
+   * meanings and defaults); a Set clamps to the parameter's range. */
+#define VU_MASS_SPRING_FILTER_SET_GET(type, name, value, lowest, highest, option, key, meaning)                        \
+  virtual void Set##name(const type _arg)                                                                              \
+  {                                                                                                                    \
+    const type clamped = std::min<type>(std::max<type>(_arg, lowest), highest);                                        \
+    if (m_Parameters.name != clamped)                                                                                  \
+    {                                                                                                                  \
+      m_Parameters.name = clamped;                                                                                     \
+      this->Modified();                                                                                                \
+    }                                                                                                                  \
+  }                                                                                                                    \
+  virtual type Get##name() const { return m_Parameters.name; }
+  VU_MASS_SPRING_PARAMETERS(VU_MASS_SPRING_FILTER_SET_GET)
+#undef VU_MASS_SPRING_FILTER_SET_GET
 
   /** Particles held during the unroll phase when LockedEdge is Custom. */
   void
   SetLockedParticles(const std::vector<uint32_t> & particles)
   {
-    if (particles != m_LockedParticles)
+    if (particles != m_Parameters.LockedParticles)
     {
-      m_LockedParticles = particles;
+      m_Parameters.LockedParticles = particles;
       this->Modified();
     }
   }
   const std::vector<uint32_t> &
   GetLockedParticles() const
   {
-    return m_LockedParticles;
+    return m_Parameters.LockedParticles;
   }
 
   /** The parameters as MassSpringSheetFlattener takes them. */
@@ -176,29 +172,8 @@ protected:
   PrintSelf(std::ostream & os, Indent indent) const override;
 
 private:
-  IntegratorEnum        m_Integrator{ IntegratorEnum::ImplicitEuler };
-  double                m_TimeStep{ 0.0 };
-  double                m_TimeStepSafety{ 0.5 };
-  double                m_StepsPerFallTime{ 40.0 };
-  double                m_Stiffness{ 1.0 };
-  double                m_ShearStiffnessRatio{ 0.5 };
-  double                m_BendingStiffnessRatio{ 0.0 };
-  double                m_Density{ 1.0 };
-  double                m_Gravity{ 0.0 };
-  double                m_HangingStrain{ 0.01 };
-  double                m_Damping{ -1.0 };
-  double                m_SpringDamping{ 0.0 };
-  double                m_Restitution{ 0.1 };
-  LockedEdgeEnum        m_LockedEdge{ LockedEdgeEnum::OuterEdge };
-  std::vector<uint32_t> m_LockedParticles;
-  unsigned int          m_MaximumStepsPerPhase{ 3000 };
-  double                m_KineticEnergyTolerance{ 1e-9 };
-  double                m_ResidualForceTolerance{ 1e-3 };
-  double                m_PlanarityTolerance{ 0.25 };
-  unsigned int          m_RelaxationIterations{ 300 };
-  double                m_RelaxationTolerance{ 1e-5 };
-  unsigned int          m_CoarseningFactor{ 0 };
-  unsigned int          m_CoarseParticles{ 3000 };
+  /** Every parameter but the number of work units, which is the filter's own. */
+  MassSpringFlatteningParameters m_Parameters;
 
   MassSpringFlatteningReport m_Report;
   MassSpringSystem *         m_CurrentSystem{ nullptr };

@@ -26,30 +26,7 @@ template <typename TInputMesh, typename TOutputMesh>
 MassSpringFlatteningParameters
 MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::GetParameters() const
 {
-  MassSpringFlatteningParameters p;
-  p.Integrator = m_Integrator;
-  p.TimeStep = m_TimeStep;
-  p.TimeStepSafety = m_TimeStepSafety;
-  p.StepsPerFallTime = m_StepsPerFallTime;
-  p.Stiffness = m_Stiffness;
-  p.ShearStiffnessRatio = m_ShearStiffnessRatio;
-  p.BendingStiffnessRatio = m_BendingStiffnessRatio;
-  p.Density = m_Density;
-  p.Gravity = m_Gravity;
-  p.HangingStrain = m_HangingStrain;
-  p.Damping = m_Damping;
-  p.SpringDamping = m_SpringDamping;
-  p.Restitution = m_Restitution;
-  p.LockedEdge = m_LockedEdge;
-  p.LockedParticles = m_LockedParticles;
-  p.MaximumStepsPerPhase = m_MaximumStepsPerPhase;
-  p.KineticEnergyTolerance = m_KineticEnergyTolerance;
-  p.ResidualForceTolerance = m_ResidualForceTolerance;
-  p.PlanarityTolerance = m_PlanarityTolerance;
-  p.RelaxationIterations = m_RelaxationIterations;
-  p.RelaxationTolerance = m_RelaxationTolerance;
-  p.CoarseningFactor = m_CoarseningFactor;
-  p.CoarseParticles = m_CoarseParticles;
+  MassSpringFlatteningParameters p = m_Parameters;
   p.NumberOfWorkUnits = this->GetNumberOfWorkUnits();
   return p;
 }
@@ -64,7 +41,7 @@ MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::GenerateData()
   MassSpringSheetFlattener flattener;
   flattener.SetParameters(this->GetParameters());
   // Progress: each phase advances a share of the bar as its steps approach the limit.
-  const double stepLimit = m_MaximumStepsPerPhase;
+  const double stepLimit = m_Parameters.MaximumStepsPerPhase;
   flattener.SetStepCallback([this, stepLimit](MassSpringSystem & system, const std::string & phase, uint64_t step) {
     m_CurrentSystem = &system;
     m_CurrentPhase = phase;
@@ -81,7 +58,7 @@ MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::GenerateData()
       base = 0.7;
       share = 0.3;
     }
-    const double limit = phase.rfind("relax", 0) == 0 ? m_RelaxationIterations : stepLimit;
+    const double limit = phase.rfind("relax", 0) == 0 ? m_Parameters.RelaxationIterations : stepLimit;
     this->UpdateProgress(static_cast<float>(base + share * std::min(1.0, step / limit)));
     return !this->GetAbortGenerateData();
   });
@@ -131,29 +108,13 @@ void
 MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::PrintSelf(std::ostream & os, Indent indent) const
 {
   Superclass::PrintSelf(os, indent);
-  os << indent << "Integrator: " << m_Integrator << std::endl;
-  os << indent << "TimeStep: " << m_TimeStep << std::endl;
-  os << indent << "TimeStepSafety: " << m_TimeStepSafety << std::endl;
-  os << indent << "StepsPerFallTime: " << m_StepsPerFallTime << std::endl;
-  os << indent << "Stiffness: " << m_Stiffness << std::endl;
-  os << indent << "ShearStiffnessRatio: " << m_ShearStiffnessRatio << std::endl;
-  os << indent << "BendingStiffnessRatio: " << m_BendingStiffnessRatio << std::endl;
-  os << indent << "Density: " << m_Density << std::endl;
-  os << indent << "Gravity: " << m_Gravity << std::endl;
-  os << indent << "HangingStrain: " << m_HangingStrain << std::endl;
-  os << indent << "Damping: " << m_Damping << std::endl;
-  os << indent << "SpringDamping: " << m_SpringDamping << std::endl;
-  os << indent << "Restitution: " << m_Restitution << std::endl;
-  os << indent << "LockedEdge: " << m_LockedEdge << std::endl;
-  os << indent << "LockedParticles: " << m_LockedParticles.size() << std::endl;
-  os << indent << "MaximumStepsPerPhase: " << m_MaximumStepsPerPhase << std::endl;
-  os << indent << "KineticEnergyTolerance: " << m_KineticEnergyTolerance << std::endl;
-  os << indent << "ResidualForceTolerance: " << m_ResidualForceTolerance << std::endl;
-  os << indent << "PlanarityTolerance: " << m_PlanarityTolerance << std::endl;
-  os << indent << "RelaxationIterations: " << m_RelaxationIterations << std::endl;
-  os << indent << "RelaxationTolerance: " << m_RelaxationTolerance << std::endl;
-  os << indent << "CoarseningFactor: " << m_CoarseningFactor << std::endl;
-  os << indent << "CoarseParticles: " << m_CoarseParticles << std::endl;
+  os << indent << "Integrator: " << m_Parameters.Integrator << std::endl;
+  os << indent << "LockedEdge: " << m_Parameters.LockedEdge << std::endl;
+  os << indent << "LockedParticles: " << m_Parameters.LockedParticles.size() << std::endl;
+#define VU_MASS_SPRING_FILTER_PRINT(type, name, value, lowest, highest, option, key, meaning)                          \
+  os << indent << #name ": " << m_Parameters.name << std::endl;
+  VU_MASS_SPRING_PARAMETERS(VU_MASS_SPRING_FILTER_PRINT)
+#undef VU_MASS_SPRING_FILTER_PRINT
   os << indent << "CurrentPhase: " << m_CurrentPhase << std::endl;
   os << indent << "CurrentStep: " << m_CurrentStep << std::endl;
 }

@@ -22,6 +22,8 @@
 #include "itkMassSpringSystem.h"
 #include "itkSheetMesh.h"
 
+#include <cfloat>
+#include <climits>
 #include <functional>
 #include <string>
 #include <vector>
@@ -54,67 +56,79 @@ ToString(SheetLockedEdgeEnum edge);
 VirtualUnwrapping_EXPORT SheetLockedEdgeEnum
 SheetLockedEdgeFromString(const std::string & name);
 
-/** Parameters of MassSpringSheetFlattener; lengths in the mesh's units (mm), times in
- * seconds of simulated time. A value of 0 where "automatic" is said picks it from the
- * mesh (see MassSpringSheetFlattener). */
+/** The simulation's numeric parameters, one line each:
+ *   X(type, Name, default, lowest, highest, "tool-option", "report_key", "meaning").
+ * Lengths in the mesh's units (mm), times in seconds of simulated time; a value of 0 where
+ * "automatic" is said picks it from the mesh (see MassSpringSheetFlattener). The members of
+ * MassSpringFlatteningParameters, MassSpringFlatteningMeshFilter's Set/Get methods (which
+ * clamp to [lowest, highest]) and its PrintSelf, and the command-line tool's options and
+ * report are all made from this list: a new parameter is a line here and its use in the
+ * simulation. */
+// clang-format off
+#define VU_MASS_SPRING_PARAMETERS(X)                                                                            \
+  X(double, TimeStep, 0.0, 0.0, DBL_MAX, "time-step", "time_step",                                              \
+    "simulation time step in seconds; 0: automatic (explicit: --time-step-safety times the "                    \
+    "stability bound; implicit: the fall time divided by --steps-per-fall)")                                    \
+  X(double, TimeStepSafety, 0.5, 1e-6, 100.0, "time-step-safety", "time_step_safety",                           \
+    "automatic explicit step as a fraction of its linear stability bound")                                      \
+  X(double, StepsPerFallTime, 40.0, 1e-3, DBL_MAX, "steps-per-fall", "steps_per_fall_time",                     \
+    "automatic implicit step: the fall time (the sheet falling its own length) divided by this")                \
+  X(double, Stiffness, 1.0, 1e-12, DBL_MAX, "stiffness", "stiffness",                                           \
+    "stiffness of a structural spring of mean length; a spring of rest length L gets stiffness "                \
+    "* mean / L")                                                                                               \
+  X(double, ShearStiffnessRatio, 0.5, 0.0, DBL_MAX, "shear", "shear_stiffness_ratio",                           \
+    "shear springs' stiffness (across each pair of triangles sharing an edge) relative to "                     \
+    "structural; 0: off")                                                                                       \
+  X(double, BendingStiffnessRatio, 0.0, 0.0, DBL_MAX, "bending", "bending_stiffness_ratio",                     \
+    "bending springs' stiffness (grid meshes: every other particle along rows and columns) "                    \
+    "relative to structural; 0: off")                                                                           \
+  X(double, Density, 1.0, 1e-12, DBL_MAX, "density", "density",                                                 \
+    "mass per unit area")                                                                                       \
+  X(double, Gravity, 0.0, 0.0, DBL_MAX, "gravity", "gravity",                                                   \
+    "gravity magnitude; 0: automatic (see --hanging-strain)")                                                   \
+  X(double, HangingStrain, 0.01, 1e-9, 1.0, "hanging-strain", "hanging_strain",                                 \
+    "automatic gravity stretches a hanging row by about this strain")                                           \
+  X(double, Damping, -1.0, -DBL_MAX, DBL_MAX, "damping", "damping",                                             \
+    "viscous damping (1/s); negative: automatic (2 / fall time)")                                               \
+  X(double, SpringDamping, 0.0, 0.0, DBL_MAX, "spring-damping", "spring_damping",                               \
+    "damping along springs (s), relative to their stiffness")                                                   \
+  X(double, Restitution, 0.1, 0.0, 1.0, "restitution", "restitution",                                           \
+    "collision restitution k_r in [0, 1] (the paper: 0.1)")                                                     \
+  X(unsigned int, MaximumStepsPerPhase, 3000, 1, UINT_MAX, "max-steps", "max_steps_per_phase",                  \
+    "step limit of the unroll and of the flatten phase")                                                        \
+  X(double, KineticEnergyTolerance, 1e-9, 0.0, DBL_MAX, "kinetic-energy-tolerance", "kinetic_energy_tolerance", \
+    "unroll and flatten phases converge when the relative kinetic energy stays below this at "                  \
+    "three checks in a row (every 10 steps)")                                                                   \
+  X(double, ResidualForceTolerance, 1e-3, 0.0, DBL_MAX, "residual-force-tolerance", "residual_force_tolerance", \
+    "unroll and flatten phases converge when, besides the kinetic energy, the relative residual "               \
+    "force is below this")                                                                                      \
+  X(double, PlanarityTolerance, 0.25, 1e-9, DBL_MAX, "planarity-tolerance", "planarity_tolerance",              \
+    "the unroll phase ends only when the sheet hangs in a plane: RMS distance from its plane "                  \
+    "below this fraction of the mean spring length, and no triangle turned over")                               \
+  X(unsigned int, RelaxationIterations, 300, 1, UINT_MAX, "relaxation-iterations", "relaxation_iterations",     \
+    "iteration limit of the quasi-static relaxation on the plane")                                              \
+  X(double, RelaxationTolerance, 1e-5, 0.0, DBL_MAX, "relaxation-tolerance", "relaxation_tolerance",            \
+    "relaxation on the plane ends at this relative residual force")                                             \
+  X(unsigned int, CoarseningFactor, 0, 0, UINT_MAX, "coarsening", "coarsening_factor",                          \
+    "grid meshes: simulate every n-th row and column, then relax every particle; 0: automatic "                 \
+    "(see --coarse-particles), 1: the full mesh")                                                               \
+  X(unsigned int, CoarseParticles, 3000, 4, 1u << 30, "coarse-particles", "coarse_particles",                   \
+    "grid meshes, automatic coarsening: simulate at most about this many particles")
+// clang-format on
+
+/** Parameters of MassSpringSheetFlattener: the numeric ones of VU_MASS_SPRING_PARAMETERS
+ * (defaults and meanings there), the integrator and what the unroll phase holds. */
 struct VirtualUnwrapping_EXPORT MassSpringFlatteningParameters
 {
+#define VU_MASS_SPRING_PARAMETER_MEMBER(type, name, value, lowest, highest, option, key, meaning) type name{ value };
+  VU_MASS_SPRING_PARAMETERS(VU_MASS_SPRING_PARAMETER_MEMBER)
+#undef VU_MASS_SPRING_PARAMETER_MEMBER
   /** Integrator of the unroll and flatten phases (the final relaxation is always the
    * implicit, quasi-static solver). */
   MassSpringIntegratorEnum Integrator{ MassSpringIntegratorEnum::ImplicitEuler };
-  /** Time step; 0: automatic (explicit: TimeStepSafety times the linear stability bound;
-   * implicit: the fall time / StepsPerFallTime). */
-  double TimeStep{ 0.0 };
-  /** Implicit steps per fall time (time for the sheet to fall its own length) of the
-   * automatic implicit time step. > 0. */
-  double StepsPerFallTime{ 40.0 };
-  /** Fraction of the linear stability bound used by the automatic explicit time step. */
-  double TimeStepSafety{ 0.5 };
-  /** Stiffness of a structural spring of mean length (force per length); a spring of rest
-   * length L gets Stiffness * meanLength / L, so the sheet responds uniformly. > 0. */
-  double Stiffness{ 1.0 };
-  /** Shear springs (across each pair of triangles sharing an edge; grid diagonals on grid
-   * meshes), relative to the structural stiffness; 0 turns them off. */
-  double ShearStiffnessRatio{ 0.5 };
-  /** Bending springs (grid meshes: joining every other particle along rows and columns),
-   * relative to the structural stiffness; 0 (default) turns them off. */
-  double BendingStiffnessRatio{ 0.0 };
-  /** Mass per unit area of the sheet. > 0. */
-  double Density{ 1.0 };
-  /** Gravity magnitude; 0: automatic, so that the sheet's own weight stretches a hanging
-   * row by about HangingStrain. */
-  double Gravity{ 0.0 };
-  double HangingStrain{ 0.01 };
-  /** Viscous damping (1/s); negative: automatic (2 / fall time). */
-  double Damping{ -1.0 };
-  /** Spring damping (s) along springs, relative to their stiffness. */
-  double SpringDamping{ 0.0 };
-  /** Collision response restitution k_r in [0, 1] (the paper: 0.1). */
-  double Restitution{ 0.1 };
   /** Unroll phase: hold an edge and let gravity unfurl the sheet. */
   SheetLockedEdgeEnum   LockedEdge{ SheetLockedEdgeEnum::OuterEdge };
   std::vector<uint32_t> LockedParticles;
-  /** Step limits of the unroll and flatten phases. */
-  unsigned int MaximumStepsPerPhase{ 3000 };
-  /** Convergence of the unroll and flatten phases: relative kinetic energy below
-   * KineticEnergyTolerance at three checks in a row (checks every 10 steps), then relative
-   * residual force below ResidualForceTolerance (see MassSpringSystem for both measures). */
-  double KineticEnergyTolerance{ 1e-9 };
-  double ResidualForceTolerance{ 1e-3 };
-  /** The unroll phase is over only when the sheet hangs in a plane: RMS distance from its
-   * best-fitting plane below this fraction of the mean spring length, and no triangle
-   * turned over as seen along the plane's normal (a curl left at the free end would fold
-   * over on the plane). */
-  double PlanarityTolerance{ 0.25 };
-  /** Quasi-static relaxation on the plane after the flatten phase: iteration limit and
-   * tolerance on the relative residual force. */
-  unsigned int RelaxationIterations{ 300 };
-  double       RelaxationTolerance{ 1e-5 };
-  /** Coarse-to-fine for grid meshes: simulate every n-th row and column, then carry the
-   * result to every particle and relax there. 0: automatic (coarse grid of at most
-   * CoarseParticles particles); 1: simulate the full mesh. */
-  unsigned int CoarseningFactor{ 0 };
-  unsigned int CoarseParticles{ 3000 };
   /** Threads for the force loops (0: ITK's default). */
   unsigned int NumberOfWorkUnits{ 0 };
 };

@@ -19,7 +19,66 @@
 
 #include "vuCommands.h"
 
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
 namespace vu {
+namespace {
+/** A parameter's range as a check with a message a user reads: "> 0" where the lowest
+ * value is only there to keep a division finite. */
+CLI::Validator
+ParameterRange(double lowest, double highest)
+{
+  std::ostringstream range;
+  range << std::setprecision(12);
+  if (lowest > 0.0 && lowest < 1e-2)
+  {
+    range << "> 0";
+  }
+  else if (lowest > std::numeric_limits<double>::lowest())
+  {
+    range << ">= " << lowest;
+  }
+  if (highest < static_cast<double>(std::numeric_limits<unsigned int>::max()))
+  {
+    range << (range.tellp() > 0 ? " and " : "") << "<= " << highest;
+  }
+  const bool        bounded = range.tellp() > 0;
+  const std::string text = bounded ? "a number " + range.str() : std::string("a finite number");
+  // The name shown in --help beside the type, as the other number checks name theirs.
+  std::ostringstream name;
+  name << std::setprecision(12);
+  if (highest < static_cast<double>(std::numeric_limits<unsigned int>::max()))
+  {
+    name << "[" << lowest << ", " << highest << "]";
+  }
+  else if (lowest > 0.0 && lowest < 1e-2)
+  {
+    name << "POSITIVE";
+  }
+  else if (lowest == 0.0)
+  {
+    name << "NONNEGATIVE";
+  }
+  else if (bounded)
+  {
+    name << ">=" << lowest;
+  }
+  return CLI::Validator(
+    [lowest, highest, text](std::string & value) -> std::string {
+      double number = 0.0;
+      if (CLI::detail::lexical_cast(value, number) && std::isfinite(number) && number >= lowest && number <= highest)
+      {
+        return {};
+      }
+      return "must be " + text + ", not " + value;
+    },
+    name.str());
+}
+} // namespace
+
 void
 AddSimulationOptions(CLI::App * command, SimulationOptions & options)
 {
@@ -29,68 +88,18 @@ AddSimulationOptions(CLI::App * command, SimulationOptions & options)
     ->capture_default_str()
     ->check(CLI::IsMember({ "euler", "midpoint", "rk4", "symplectic-euler", "implicit-euler" }))
     ->group(group);
-  command->add_option("--time-step", p.TimeStep, "simulation time step in seconds; 0: automatic")
-    ->capture_default_str()
-    ->check(vu::NonNegative())
+#define VU_SIMULATION_OPTION(type, name, value, lowest, highest, option, key, meaning)                                 \
+  command->add_option("--" option, p.name, meaning)                                                                    \
+    ->capture_default_str()                                                                                            \
+    ->check(ParameterRange(static_cast<double>(lowest), static_cast<double>(highest)))                                 \
     ->group(group);
-  command
-    ->add_option("--time-step-safety", p.TimeStepSafety, "automatic explicit step as a fraction of its stability bound")
-    ->capture_default_str()
-    ->check(vu::Positive())
-    ->group(group);
-  command->add_option("--steps-per-fall", p.StepsPerFallTime, "automatic implicit step: fall time divided by this")
-    ->capture_default_str()
-    ->check(vu::Positive())
-    ->group(group);
-  command->add_option("--stiffness", p.Stiffness, "stiffness of a spring of mean length")
-    ->capture_default_str()
-    ->check(vu::Positive())
-    ->group(group);
-  command->add_option("--shear", p.ShearStiffnessRatio, "shear springs' stiffness relative to structural; 0: off")
-    ->capture_default_str()
-    ->check(vu::NonNegative())
-    ->group(group);
-  command->add_option("--bending", p.BendingStiffnessRatio, "bending springs' stiffness relative to structural; 0: off")
-    ->capture_default_str()
-    ->check(vu::NonNegative())
-    ->group(group);
-  command->add_option("--damping", p.Damping, "viscous damping (1/s); negative: automatic")
-    ->capture_default_str()
-    ->group(group);
-  command->add_option("--spring-damping", p.SpringDamping, "damping along springs (s)")
-    ->capture_default_str()
-    ->check(vu::NonNegative())
-    ->group(group);
-  command->add_option("--gravity", p.Gravity, "gravity magnitude; 0: automatic (see --hanging-strain)")
-    ->capture_default_str()
-    ->check(vu::NonNegative())
-    ->group(group);
-  command->add_option("--hanging-strain", p.HangingStrain, "automatic gravity stretches a hanging row by this")
-    ->capture_default_str()
-    ->check(vu::Positive())
-    ->group(group);
-  command->add_option("--restitution", p.Restitution, "collision restitution k_r in [0, 1]")
-    ->capture_default_str()
-    ->check(CLI::Range(0.0, 1.0))
-    ->group(group);
+  VU_MASS_SPRING_PARAMETERS(VU_SIMULATION_OPTION)
+#undef VU_SIMULATION_OPTION
   command->add_option("--locked-edge", options.LockedEdge, "edge held while unrolling: auto, outer, inner, none")
     ->capture_default_str()
     ->check(CLI::IsMember({ "auto", "outer", "inner", "none" }))
     ->group(group);
   command->add_option("--lock", options.LockedParticles, "particle ids to hold while unrolling (instead of an edge)")
-    ->group(group);
-  command->add_option("--max-steps", p.MaximumStepsPerPhase, "step limit of the unroll and of the flatten phase")
-    ->capture_default_str()
-    ->check(vu::Positive())
-    ->group(group);
-  command
-    ->add_option("--coarse-particles", p.CoarseParticles, "grid meshes: simulate at most about this many particles")
-    ->capture_default_str()
-    ->check(CLI::Range(4u, 1u << 30))
-    ->group(group);
-  command
-    ->add_option("--coarsening", p.CoarseningFactor, "grid meshes: simulate every n-th row and column; 0: automatic")
-    ->capture_default_str()
     ->group(group);
 }
 
@@ -123,29 +132,13 @@ ResolveSimulationParameters(const SimulationOptions & options, const itk::SheetM
 nlohmann::json
 ToJson(const itk::MassSpringFlatteningParameters & p)
 {
-  return { { "integrator", itk::ToString(p.Integrator) },
-           { "time_step", p.TimeStep },
-           { "time_step_safety", p.TimeStepSafety },
-           { "steps_per_fall_time", p.StepsPerFallTime },
-           { "stiffness", p.Stiffness },
-           { "shear_stiffness_ratio", p.ShearStiffnessRatio },
-           { "bending_stiffness_ratio", p.BendingStiffnessRatio },
-           { "density", p.Density },
-           { "gravity", p.Gravity },
-           { "hanging_strain", p.HangingStrain },
-           { "damping", p.Damping },
-           { "spring_damping", p.SpringDamping },
-           { "restitution", p.Restitution },
-           { "locked_edge", itk::ToString(p.LockedEdge) },
-           { "locked_particles", p.LockedParticles.size() },
-           { "max_steps_per_phase", p.MaximumStepsPerPhase },
-           { "kinetic_energy_tolerance", p.KineticEnergyTolerance },
-           { "residual_force_tolerance", p.ResidualForceTolerance },
-           { "planarity_tolerance", p.PlanarityTolerance },
-           { "relaxation_iterations", p.RelaxationIterations },
-           { "relaxation_tolerance", p.RelaxationTolerance },
-           { "coarsening_factor", p.CoarseningFactor },
-           { "coarse_particles", p.CoarseParticles } };
+  nlohmann::json json = { { "integrator", itk::ToString(p.Integrator) },
+                          { "locked_edge", itk::ToString(p.LockedEdge) },
+                          { "locked_particles", p.LockedParticles.size() } };
+#define VU_SIMULATION_JSON(type, name, value, lowest, highest, option, key, meaning) json[key] = p.name;
+  VU_MASS_SPRING_PARAMETERS(VU_SIMULATION_JSON)
+#undef VU_SIMULATION_JSON
+  return json;
 }
 
 nlohmann::json
