@@ -699,13 +699,17 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   surface.Validate("mass-spring flattening input");
   m_Report = MassSpringFlatteningReport();
   const MassSpringFlatteningParameters & p = m_Parameters;
-  if (!(p.Restitution >= 0.0 && p.Restitution <= 1.0) || !(p.TimeStep >= 0.0) || !(p.TimeStepSafety > 0.0) ||
-      !(p.StepsPerFallTime > 0.0) || !(p.Gravity >= 0.0) || !(p.HangingStrain > 0.0) || !(p.PlanarityTolerance > 0.0) ||
-      p.MaximumStepsPerPhase == 0 || !(p.SpringDamping >= 0.0))
-  {
-    itkGenericExceptionMacro(<< "mass-spring flattening: impossible parameters (restitution in [0, 1], time step >= 0, "
-                             << "gravity >= 0, hanging strain > 0, step limit >= 1, spring damping >= 0)");
+  // Every numeric parameter within its range (a NaN in none).
+#define VU_MASS_SPRING_CHECK_RANGE(type, name, value, lowest, highest, option, key, meaning)                           \
+  if (!(static_cast<double>(p.name) >= static_cast<double>(lowest) &&                                                  \
+        static_cast<double>(p.name) <= static_cast<double>(highest)))                                                  \
+  {                                                                                                                    \
+    itkGenericExceptionMacro(<< "mass-spring flattening: impossible parameter " #name " = " << p.name                  \
+                             << " (its range: " << static_cast<type>(lowest) << " to " << static_cast<type>(highest)   \
+                             << ")");                                                                                  \
   }
+  VU_MASS_SPRING_PARAMETERS(VU_MASS_SPRING_CHECK_RANGE)
+#undef VU_MASS_SPRING_CHECK_RANGE
   const size_t n = surface.GetNumberOfPoints();
   m_Report.Particles = n;
 
