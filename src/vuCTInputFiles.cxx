@@ -234,6 +234,14 @@ MetaImageHeaderProblem(const std::string & file)
     }
     if (equals == std::string::npos)
     {
+      // MetaIO would read it as the start of the next field's name and so find its
+      // header, and the data after it, elsewhere than this check does.
+      const std::string text = Trim(line.c_str());
+      if (!text.empty())
+      {
+        return "cannot read " + file + ": the header line '" + text.substr(0, 40) +
+               "' is not a MetaImage field (NAME = VALUE)";
+      }
       continue;
     }
     const std::string key = Trim(line.substr(0, equals).c_str());

@@ -87,6 +87,10 @@ def main():
                                  .encode() + bytes(64))
     huge_inflation = write(w("in", "huge_inflation.mha"),
                            (compressed_header % ("6000 5000 4000", "")).encode() + bytes(64))
+    # Found by fuzzing: a header line without '=' (MetaIO reads it into the next field's name,
+    # finds the data elsewhere and inflates it for ever).
+    with open(os.path.join(data, "fuzz", "vuFuzzImageFile", "found-line-without-equals"), "rb") as f:
+        line_without_equals = write(w("in", "line_without_equals.mha"), f.read())
     nrrd_header = ("NRRD0004\ntype: short\ndimension: 3\nsizes: %s\nendian: little\nencoding: %s\n\n")
     huge_nrrd = write(w("in", "huge.nrrd"), (nrrd_header % ("60000 50000 40000", "raw")).encode() + bytes(64))
     huge_gzip_nrrd = write(w("in", "huge_gzip.nrrd"), (nrrd_header % ("60000 50000 40000", "gzip")).encode() + bytes(64))
@@ -146,6 +150,7 @@ def main():
         ("info NRRD claims 1.2e14 voxels in 64 bytes", ["info", huge_nrrd], "cannot hold an image"),
         ("unwrap gzip NRRD claims 1.2e14 voxels", ["unwrap", huge_gzip_nrrd, "-o", out("uw_huge_nrrd"), "-q"],
          "cannot hold an image"),
+        ("info MetaImage header line without =", ["info", line_without_equals], "not a MetaImage field"),
         ("info zero spacing", ["info", zero_spacing], "spacing"),
         ("info 2D image", ["info", flat_2d], "(single 2D|2D|one slice|3D)"),
         ("info negative --spacing", ["info", ok_volume, "--spacing", "1", "-1", "1"], "--spacing"),
