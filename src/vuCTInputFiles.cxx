@@ -202,6 +202,16 @@ ComponentTypeName(IOComponentEnum type, size_t bytes)
   }
 }
 
+namespace {
+// The most image bytes `bytes` of deflate (zlib, gzip) data can hold: about 1000 to 1
+// at best, with room for a small image.
+double
+DeflateCanHold(double bytes)
+{
+  return 1100.0 * bytes + 65536.0;
+}
+} // namespace
+
 std::string
 SizeText(const ImageIOBase * io)
 {
@@ -450,7 +460,7 @@ TiffDirectoryProblem(const std::string & file)
     const double pixelBytes = static_cast<double>(std::max<uint64_t>(width, 1)) *
                               static_cast<double>(std::max<uint64_t>(length, 1)) * static_cast<double>(samples) *
                               static_cast<double>(bits) / 8.0;
-    const double holds = compression == 1 ? static_cast<double>(size) : 1100.0 * static_cast<double>(size) + 65536.0;
+    const double holds = compression == 1 ? static_cast<double>(size) : DeflateCanHold(static_cast<double>(size));
     if (pixelBytes > holds)
     {
       return "cannot read " + file + ": its TIFF image claims " + std::to_string(width) + " x " +
@@ -641,7 +651,7 @@ MetaImageTruncation(const std::string & file, ImageIOBase * io)
   if (meta->GetMetaImagePointer()->CompressedData())
   {
     // zlib compresses at best about 1000 to 1: a larger image is not in the file.
-    if (!error && static_cast<double>(io->GetImageSizeInBytes()) > 1100.0 * static_cast<double>(size) + 65536.0)
+    if (!error && static_cast<double>(io->GetImageSizeInBytes()) > DeflateCanHold(static_cast<double>(size)))
     {
       return "cannot read " + file + ": its compressed data file " + data.string() + " of " + std::to_string(size) +
              " bytes cannot hold an image of " + std::to_string(io->GetImageSizeInBytes()) + " bytes";
@@ -740,7 +750,7 @@ NrrdTruncation(const std::string & file, ImageIOBase * io)
   }
   else if (encoding == "gz" || encoding == "gzip")
   {
-    holds = 1100.0 * bytes + 65536.0 >= needed;
+    holds = DeflateCanHold(bytes) >= needed;
   }
   else if (encoding == "bz2" || encoding == "bzip2")
   {
@@ -750,13 +760,8 @@ NrrdTruncation(const std::string & file, ImageIOBase * io)
   {
     return {};
   }
-  std::string size;
-  for (unsigned d = 0; d < io->GetNumberOfDimensions(); ++d)
-  {
-    size += (d == 0 ? "" : " x ") + std::to_string(io->GetDimensions(d));
-  }
   return "cannot read " + file + ": its NRRD data (" + encoding + ", " + std::to_string(available) + " bytes" +
-         (dataFile.empty() ? "" : " in " + data.string()) + ") cannot hold an image of " + size + " voxels (" +
+         (dataFile.empty() ? "" : " in " + data.string()) + ") cannot hold an image of " + SizeText(io) + " voxels (" +
          std::to_string(static_cast<uintmax_t>(needed)) + " bytes)";
 }
 
