@@ -61,6 +61,10 @@ struct VirtualUnwrapping_EXPORT SheetVolumeView
 {
   const uint8_t * Mask{ nullptr };
   const float *   Intensity{ nullptr };
+  /** Voxels that hold data of the scan (non-zero), or nullptr for all of them. Beyond the
+   * data (outside a scan cut by its field of view, once resampled along a tilted roll axis)
+   * the sheet is unknown, not absent: the roll tracer carries a turn through it. */
+  const uint8_t * Data{ nullptr };
   size_t          Size[3]{ 0, 0, 0 };
   double          Spacing[3]{ 1.0, 1.0, 1.0 };
   /** True when the roll axis is known to run along the slice normal (for example estimated
@@ -117,7 +121,23 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
     size_t Slice;
     double Turn;
   };
-  std::vector<LayerJump>   LayerJumps;
+  std::vector<LayerJump> LayerJumps;
+  /** Roll method: edges of the finished grid across which the mesh steps sideways (in the
+   * slice plane) by more than 0.7 of the turn spacing beyond what the edges
+   * around it do: a trace that crossed onto the next turn, or rows averaged from slices
+   * traced on different turns. Checked on the mesh itself, so that a layer jump the
+   * slice-to-slice check missed is still named. Row and column of the grid point at the
+   * step (for a step along the axis, between Row and Row + 1), the slice of the view
+   * nearest that row, and the size of the step (mm). */
+  struct GridStep
+  {
+    size_t Row;
+    size_t Column;
+    bool   AlongAxis;
+    double Step;
+    size_t Slice{ 0 };
+  };
+  std::vector<GridStep>    GridSteps;
   std::vector<std::string> Warnings;
 };
 
@@ -235,6 +255,21 @@ public:
   {
     return m_Report;
   }
+
+  /** Edges of a grid mesh of a rolled sheet (rows in planes of constant z, the roll axis
+   * along z, as Extract makes them) across which the mesh steps sideways in the slice plane
+   * by more than `limit` (mm) beyond what the edges around it do: a trace that crossed onto
+   * the next turn makes such a step along the sheet, rows averaged from slices traced on
+   * different turns make one along the axis. A smooth sheet bends gradually, so each edge
+   * is measured against the median of its neighbours, component by component (along the
+   * sheet: the second difference of the row's curve over seven columns; along the axis:
+   * the difference between neighbouring rows over five rows; the six columns at either end,
+   * which follow the trace's bending, jittering end, are left out along the sheet).
+   * Consecutive flagged edges of one row (along the sheet) or one column (along the axis)
+   * are reported once, at the largest step; Slice is left 0. Extract runs it with 0.7 of
+   * the turn spacing. */
+  static std::vector<SheetMidSurfaceReport::GridStep>
+  FindGridSteps(const SheetMesh & mesh, double limit);
 
 private:
   SheetMidSurfaceParameters m_Parameters;

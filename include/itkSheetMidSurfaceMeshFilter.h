@@ -160,10 +160,12 @@ private:
   static AxisType
   EstimateRollAxisFromCentroids(const SheetImageType * sheetMask);
   /** Returns true when the axis came from the structure tensor (so the slices now cut
-   * straight across it). */
+   * straight across it). After a resampling, sheetData marks the voxels that lie inside the
+   * original box (1; the others hold no data of the scan); otherwise it is left null. */
   bool
   AlignWithRollAxis(typename SheetImageType::Pointer &     sheetMask,
                     typename IntensityImageType::Pointer & sheetIntensity,
+                    typename SheetImageType::Pointer &     sheetData,
                     std::vector<std::string> &             warnings) const;
   /** Smooths the intensities of a noisy scan for tracing (SheetIntensityLevels::DenoisingSigma
    * across the sheet, twice that along the roll axis); a clean scan is left as it is. */

@@ -155,7 +155,8 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
       }
     }
   }
-  const bool axisKnown = this->AlignWithRollAxis(sheetMask, sheetIntensity, warnings);
+  typename SheetImageType::Pointer sheetData;
+  const bool                       axisKnown = this->AlignWithRollAxis(sheetMask, sheetIntensity, sheetData, warnings);
   if (sheetIntensity)
   {
     this->Denoise(sheetMask, sheetIntensity, warnings);
@@ -164,6 +165,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   SheetVolumeView view;
   view.Mask = sheetMask->GetBufferPointer();
   view.Intensity = sheetIntensity ? sheetIntensity->GetBufferPointer() : nullptr;
+  view.Data = sheetData ? sheetData->GetBufferPointer() : nullptr;
   view.AxisAlongSlices = axisKnown;
   for (unsigned d = 0; d < 3; ++d)
   {
@@ -388,6 +390,7 @@ bool
 SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AlignWithRollAxis(
   typename SheetImageType::Pointer &     sheetMask,
   typename IntensityImageType::Pointer & sheetIntensity,
+  typename SheetImageType::Pointer &     sheetData,
   std::vector<std::string> &             warnings) const
 {
   const typename SheetImageType::Pointer     originalMask = sheetMask;
@@ -479,6 +482,23 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AlignWithRollAxis(
     maskResampler->SetDefaultPixelValue(0);
     maskResampler->Update();
     sheetMask = maskResampler->GetOutput();
+    // Where the resampled box reaches beyond the original one there is no data of the scan:
+    // a sheet cut there by the field of view is unknown, not absent.
+    auto inside = SheetImageType::New();
+    inside->CopyInformation(originalMask);
+    inside->SetRegions(originalMask->GetBufferedRegion());
+    inside->Allocate();
+    inside->FillBuffer(1);
+    auto dataResampler = ResampleImageFilter<SheetImageType, SheetImageType>::New();
+    dataResampler->SetInput(inside);
+    dataResampler->SetInterpolator(NearestNeighborInterpolateImageFunction<SheetImageType>::New());
+    dataResampler->SetOutputOrigin(newOrigin);
+    dataResampler->SetOutputSpacing(newSpacing);
+    dataResampler->SetOutputDirection(newDirection);
+    dataResampler->SetSize(newSize);
+    dataResampler->SetDefaultPixelValue(0);
+    dataResampler->Update();
+    sheetData = dataResampler->GetOutput();
     if (originalIntensity)
     {
       const float * values = originalIntensity->GetBufferPointer();

@@ -99,6 +99,11 @@ EstimateSheetIntensityLevels(std::vector<float> air, std::vector<float> material
 
 namespace {
 constexpr double Pi = 3.14159265358979323846;
+// Sideways step of the finished mesh, as a fraction of the turn spacing, reported as a
+// possible layer jump: a jump onto the next turn steps by about a whole turn spacing, while
+// the sharpest bend of a correct mesh (the innermost curl, a trace's end) stayed below 0.55
+// on the stress family's scans.
+constexpr double GridStepFraction = 0.7;
 
 // A planar curve as x, y pairs (mm).
 using Polyline = std::vector<double>;
@@ -1154,6 +1159,26 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
   }
   m_Report.SpacingAlongSheet = referenceLength / static_cast<double>(columns - 1);
   m_Report.SpacingAlongAxis = rowSpacing;
+  if (method == SheetSurfaceMethodEnum::Roll && m_Report.TurnSpacing > 0.0)
+  {
+    // A layer jump the slice-to-slice check missed shows on the mesh as a sideways step
+    // of about a turn spacing.
+    m_Report.GridSteps = FindGridSteps(mesh, GridStepFraction * m_Report.TurnSpacing);
+    for (auto & step : m_Report.GridSteps)
+    {
+      const double z = mesh.Points[3 * (step.Row * columns + step.Column) + 2];
+      step.Slice = static_cast<size_t>(std::clamp(std::lround(z / sz), 0L, static_cast<long>(nz) - 1));
+    }
+    if (!m_Report.GridSteps.empty())
+    {
+      const auto &       first = m_Report.GridSteps.front();
+      std::ostringstream text;
+      text << "the mesh steps sideways by more than " << GridStepFraction << " of the turn spacing at "
+           << m_Report.GridSteps.size() << " place(s) (possible layer jumps), first at grid row " << first.Row
+           << ", column " << first.Column << " (slice " << first.Slice << ")";
+      m_Report.Warnings.push_back(text.str());
+    }
+  }
   report(1.0);
   return mesh;
 }

@@ -41,6 +41,8 @@ constexpr double AcceptWindow = 0.4;
 constexpr long SeedHalfWidth = 3;
 // Rays on which the seed slice's trace is started (at three depths each).
 constexpr long AloneRays = 8;
+// Voxels from the edge of the scan's data within which the intensities are not trusted.
+constexpr long DataMargin = 3;
 
 double
 Median(std::vector<double> values)
@@ -84,6 +86,7 @@ class ValueSlice
 public:
   ValueSlice(const SheetVolumeView & volume, const float * values, size_t slice)
     : m_Values(values + slice * volume.Size[0] * volume.Size[1])
+    , m_Data(volume.Data != nullptr ? volume.Data + slice * volume.Size[0] * volume.Size[1] : nullptr)
     , m_NX(static_cast<long>(volume.Size[0]))
     , m_NY(static_cast<long>(volume.Size[1]))
     , m_SX(volume.Spacing[0])
@@ -94,7 +97,27 @@ public:
   Inside(double x, double y) const
   {
     const double u = x / m_SX, v = y / m_SY;
-    return u >= 0.0 && v >= 0.0 && u <= static_cast<double>(m_NX - 1) && v <= static_cast<double>(m_NY - 1);
+    if (!(u >= 0.0 && v >= 0.0 && u <= static_cast<double>(m_NX - 1) && v <= static_cast<double>(m_NY - 1)))
+    {
+      return false;
+    }
+    // Well within the data of the scan: its edge is blurred by the interpolation and the
+    // denoising, which mix in the air the resampling put beyond it.
+    if (m_Data == nullptr)
+    {
+      return true;
+    }
+    const long i = std::lround(u), j = std::lround(v);
+    for (const auto & [di, dj] :
+         { std::pair{ 0L, 0L }, { -DataMargin, 0L }, { DataMargin, 0L }, { 0L, -DataMargin }, { 0L, DataMargin } })
+    {
+      const long a = i + di, b = j + dj;
+      if (a >= 0 && b >= 0 && a < m_NX && b < m_NY && m_Data[b * m_NX + a] == 0)
+      {
+        return false;
+      }
+    }
+    return true;
   }
 
   double
@@ -113,9 +136,10 @@ public:
   }
 
 private:
-  const float * m_Values;
-  long          m_NX, m_NY;
-  double        m_SX, m_SY;
+  const float *   m_Values;
+  const uint8_t * m_Data;
+  long            m_NX, m_NY;
+  double          m_SX, m_SY;
 };
 
 struct Crossing
@@ -422,11 +446,33 @@ public:
       const double predicted = guided                              ? prior->At(m) + offset
                                : turnKnown && std::isfinite(below) ? below + turnOffset
                                                                    : last.Rho + slope * static_cast<double>(m - last.M);
-      if (predicted <= 0.0 || predicted > m_Frame.RMax)
+      if (predicted <= 0.0)
       {
         break;
       }
+      if (predicted > m_Frame.RMax)
+      {
+        // No material lies this far out within the scan's data; beyond it (a roll cut by
+        // the field of view) the turn is carried on, as below.
+        const double px = centre[0] + predicted * std::cos(static_cast<double>(m) * m_Frame.Step);
+        const double py = centre[1] + predicted * std::sin(static_cast<double>(m) * m_Frame.Step);
+        if (slice.Inside(px, py))
+        {
+          break;
+        }
+        steps.push_back({ m, predicted, false });
+        radiusAt.back() = predicted;
+        continue;
+      }
       const auto & list = crossings.Rays[a];
+      // The last accepted radius, carried to this step along the shape of the turn before
+      // (over a stretch out of the field of view an elliptic turn's radius changes a lot).
+      double lastCarried = last.Rho;
+      if (turnKnown && std::isfinite(below))
+      {
+        const double belowLast = turnBefore(dir * (last.M - start));
+        lastCarried += std::isfinite(belowLast) ? below - belowLast : 0.0;
+      }
       // The crossing nearest a prediction, if it is near enough to it (and to the last
       // accepted radius) and not on the turn traced one revolution before (the trace would
       // circle); list.size() otherwise.
@@ -466,7 +512,7 @@ public:
         }
         const double window = AcceptWindow * std::max(spacing, voxel);
         const double apart = 0.6 * std::max(m_Width, voxel);
-        const bool   near = bestDistance < window && (guided || std::abs(list[best].Radius - last.Rho) < window);
+        const bool   near = bestDistance < window && (guided || std::abs(list[best].Radius - lastCarried) < window);
         const bool   circling = std::isfinite(below) && std::abs(list[best].Radius - below) < apart;
         return near && !circling ? best : list.size();
       };

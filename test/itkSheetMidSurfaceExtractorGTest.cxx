@@ -33,6 +33,7 @@ struct SpiralVolume
 {
   size_t               Size[3]{ 80, 80, 8 };
   std::vector<uint8_t> Mask;
+  std::vector<uint8_t> Data;
   explicit SpiralVolume(size_t slices = 8, size_t gapFrom = 1000)
     : Size{ 80, 80, slices }
     , Mask(Size[0] * Size[1] * Size[2], 0)
@@ -68,6 +69,7 @@ struct SpiralVolume
   {
     itk::SheetVolumeView view;
     view.Mask = Mask.data();
+    view.Data = Data.empty() ? nullptr : Data.data();
     for (int d = 0; d < 3; ++d)
     {
       view.Size[d] = Size[d];
@@ -175,6 +177,94 @@ TEST(SheetMidSurfaceExtractor, TraceResumesBeyondAStretchItCannotFollow)
   {
     EXPECT_EQ(warning.find("slice(s)"), std::string::npos) << warning;
   }
+}
+
+TEST(SheetMidSurfaceExtractor, TurnsBeyondTheScansDataAreCarriedAcross)
+{
+  // A field of view that cuts the roll: from x = 62 on (an arc of the outer turn, where the
+  // second and a half turns pass x = 64) the volume holds no data of the scan. The trace
+  // carries the turn across on the shape of the turn before and picks it up beyond; a
+  // tracer that took the missing data for air would end the sheet there.
+  SpiralVolume volume(8);
+  volume.Data.assign(volume.Mask.size(), 1);
+  for (size_t k = 0; k < volume.Size[2]; ++k)
+  {
+    for (size_t j = 0; j < volume.Size[1]; ++j)
+    {
+      for (size_t i = 62; i < volume.Size[0]; ++i)
+      {
+        volume.Mask[(k * volume.Size[1] + j) * volume.Size[0] + i] = 0;
+        volume.Data[(k * volume.Size[1] + j) * volume.Size[0] + i] = 0;
+      }
+    }
+  }
+  itk::SheetMidSurfaceExtractor extractor;
+  const itk::SheetMesh          mesh = extractor.Extract(volume.View());
+  EXPECT_EQ(extractor.GetReport().Method, itk::SheetSurfaceMethodEnum::Roll);
+  EXPECT_NEAR(extractor.GetReport().SheetLength, 306.0, 8.0);
+  ExpectOnTheSpiral(mesh, 1.0);
+
+  // Without the data mask the same volume reads as a sheet that ends at the cut.
+  volume.Data.clear();
+  extractor.Extract(volume.View());
+  EXPECT_LT(extractor.GetReport().SheetLength, 290.0);
+}
+
+TEST(SheetMidSurfaceExtractor, GridStepsNameAMeshThatJumpsATurn)
+{
+  // A grid on the spiral r = 12 + 6 theta / (2 pi) (turn spacing 6), 10 rows one apart,
+  // columns a voxel apart along 2.5 turns: it bends everywhere, and steps nowhere.
+  itk::SheetMesh      mesh;
+  const int           rows = 10;
+  std::vector<double> theta{ 0.0 };
+  while (theta.back() < 5.0 * Pi)
+  {
+    theta.push_back(theta.back() + 1.0 / (12.0 + 6.0 * theta.back() / (2.0 * Pi)));
+  }
+  const auto columns = static_cast<int>(theta.size());
+  mesh.GridRows = rows;
+  mesh.GridColumns = columns;
+  for (int r = 0; r < rows; ++r)
+  {
+    for (int c = 0; c < columns; ++c)
+    {
+      const double radius = 12.0 + 6.0 * theta[c] / (2.0 * Pi);
+      mesh.Points.insert(mesh.Points.end(),
+                         { radius * std::cos(theta[c]), radius * std::sin(theta[c]), static_cast<double>(r) });
+      mesh.GridIndex.insert(mesh.GridIndex.end(), { r, c });
+    }
+  }
+  EXPECT_TRUE(itk::SheetMidSurfaceExtractor::FindGridSteps(mesh, 0.7 * 6.0).empty());
+
+  // Row 5 crosses onto the next turn at column 100 (its radius a turn spacing larger from
+  // there on): one step along the sheet in row 5, and steps along the axis on either side
+  // of that row, none elsewhere.
+  for (int c = 100; c < columns; ++c)
+  {
+    const size_t p = 5 * static_cast<size_t>(columns) + static_cast<size_t>(c);
+    mesh.Points[3 * p] += 6.0 * std::cos(theta[c]);
+    mesh.Points[3 * p + 1] += 6.0 * std::sin(theta[c]);
+  }
+  const auto steps = itk::SheetMidSurfaceExtractor::FindGridSteps(mesh, 0.7 * 6.0);
+  size_t     alongSheet = 0, alongAxis = 0;
+  for (const auto & step : steps)
+  {
+    EXPECT_TRUE(step.Row == 4 || step.Row == 5) << step.Row;
+    if (step.AlongAxis)
+    {
+      EXPECT_GE(step.Column, 100u);
+      ++alongAxis;
+    }
+    else
+    {
+      EXPECT_EQ(step.Row, 5u);
+      EXPECT_NEAR(static_cast<double>(step.Column), 100.0, 1.0);
+      EXPECT_GT(step.Step, 0.7 * 6.0);
+      ++alongSheet;
+    }
+  }
+  EXPECT_EQ(alongSheet, 1u);
+  EXPECT_GT(alongAxis, 0u);
 }
 
 TEST(SheetMidSurfaceExtractor, ProgressCallbackAborts)

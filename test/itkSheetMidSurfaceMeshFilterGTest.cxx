@@ -49,6 +49,7 @@ struct PhantomResult
   itk::SheetSurfaceMethodEnum Method{ itk::SheetSurfaceMethodEnum::Auto };
   size_t                      Warnings{ 0 };
   std::string                 WarningText;
+  size_t                      GridSteps{ 0 };
 };
 
 // Segments and meshes a preset phantom with default parameters, as the tool does.
@@ -71,6 +72,7 @@ SegmentPhantom(const std::string & preset, double tilt = 0.0)
   result.Threshold = segmentation->GetThreshold();
   result.Method = surface->GetReport().Method;
   result.Warnings = surface->GetWarnings().size();
+  result.GridSteps = surface->GetReport().GridSteps.size();
   result.WarningText = surface->GetWarnings().empty() ? std::string() : surface->GetWarnings().front();
   for (const std::string & warning : surface->GetWarnings())
   {
@@ -171,6 +173,8 @@ TEST(SheetMidSurfaceMeshFilter, StandardRollIsAccurateAndFlattens)
   EXPECT_LE(figures.MeanDistance, 0.5);
   EXPECT_GE(figures.Coverage, 0.97);
   EXPECT_EQ(figures.LayerJumps, 0u);
+  // The mesh's own check for layer jumps finds none either.
+  EXPECT_EQ(result.GridSteps, 0u);
   EXPECT_EQ(CountConnectedPieces(result.Mesh), 1u);
   ASSERT_TRUE(result.Mesh.IsGridStructured());
 
@@ -232,6 +236,7 @@ TEST(SheetMidSurfaceMeshFilter, TightAndCanvasAreCoveredWithoutLayerJumps)
     const Figures       figures = Measure(preset, result);
     EXPECT_GE(figures.Coverage, 0.90) << preset;
     EXPECT_EQ(figures.LayerJumps, 0u) << preset;
+    EXPECT_EQ(result.GridSteps, 0u) << preset;
     EXPECT_EQ(CountConnectedPieces(result.Mesh), 1u) << preset;
   }
 }

@@ -226,10 +226,20 @@ TraceJson(const itk::SheetMidSurfaceReport & report)
   {
     jumps.push_back({ { "slice", jump.Slice }, { "turn", jump.Turn } });
   }
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto & step : report.GridSteps)
+  {
+    steps.push_back({ { "row", step.Row },
+                      { "column", step.Column },
+                      { "slice", step.Slice },
+                      { "along", step.AlongAxis ? "axis" : "sheet" },
+                      { "step_mm", step.Step } });
+  }
   nlohmann::json json = { { "method", itk::ToString(report.Method) },
                           { "interpolated_slices", report.InterpolatedSlices },
                           { "low_confidence_regions", regions },
                           { "layer_jumps", jumps },
+                          { "mesh_steps", steps },
                           { "slices", "indices of the slices across the roll axis (after any resampling along it)" } };
   if (report.Method == itk::SheetSurfaceMethodEnum::Roll)
   {

@@ -1,0 +1,134 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkSheetMidSurfaceExtractor.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace itk {
+namespace {
+// Columns at either end of a row left out of the check along the sheet.
+constexpr size_t EndColumns = 6;
+
+double
+MedianOf(std::vector<double> values)
+{
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+// Residual of each value against the median of the values within `half` of it.
+std::vector<double>
+Residuals(const std::vector<double> & values, long half)
+{
+  const auto          n = static_cast<long>(values.size());
+  std::vector<double> residual(values.size(), 0.0);
+  for (long i = 0; i < n; ++i)
+  {
+    const long first = std::max(0L, i - half), last = std::min(n - 1, i + half);
+    residual[static_cast<size_t>(i)] =
+      values[static_cast<size_t>(i)] - MedianOf(std::vector<double>(values.begin() + first, values.begin() + last + 1));
+  }
+  return residual;
+}
+
+// Runs of consecutive entries above the limit, each reported once at its largest entry.
+template <typename Report>
+void
+ReportRuns(const std::vector<double> & residual, double limit, Report report)
+{
+  for (size_t i = 0; i < residual.size(); ++i)
+  {
+    if (std::abs(residual[i]) <= limit)
+    {
+      continue;
+    }
+    size_t best = i;
+    while (i + 1 < residual.size() && std::abs(residual[i + 1]) > limit)
+    {
+      ++i;
+      best = std::abs(residual[i]) > std::abs(residual[best]) ? i : best;
+    }
+    report(best, std::abs(residual[best]));
+  }
+}
+} // namespace
+
+std::vector<SheetMidSurfaceReport::GridStep>
+SheetMidSurfaceExtractor::FindGridSteps(const SheetMesh & mesh, double limit)
+{
+  std::vector<SheetMidSurfaceReport::GridStep> steps;
+  const auto                                   rows = static_cast<size_t>(std::max(0, mesh.GridRows));
+  const auto                                   columns = static_cast<size_t>(std::max(0, mesh.GridColumns));
+  if (!mesh.IsGridStructured() || rows * columns != mesh.GetNumberOfPoints() || columns < 3 || !(limit > 0.0))
+  {
+    return steps;
+  }
+  auto at = [&](size_t r, size_t c, int d) { return mesh.Points[3 * (r * columns + c) + static_cast<size_t>(d)]; };
+  // In-plane vectors against the median of their neighbours, component by component; the
+  // length of the difference. (No normal is needed: a step tilts the curve's own tangent.)
+  auto residualLengths = [](const std::vector<double> & x, const std::vector<double> & y, long half) {
+    const std::vector<double> rx = Residuals(x, half), ry = Residuals(y, half);
+    std::vector<double>       length(rx.size());
+    for (size_t i = 0; i < rx.size(); ++i)
+    {
+      length[i] = std::hypot(rx[i], ry[i]);
+    }
+    return length;
+  };
+  // Along the sheet: the second difference of each row's curve.
+  std::vector<double> bendX(columns - 2), bendY(columns - 2);
+  for (size_t r = 0; r < rows; ++r)
+  {
+    for (size_t c = 1; c + 1 < columns; ++c)
+    {
+      bendX[c - 1] = at(r, c - 1, 0) - 2.0 * at(r, c, 0) + at(r, c + 1, 0);
+      bendY[c - 1] = at(r, c - 1, 1) - 2.0 * at(r, c, 1) + at(r, c + 1, 1);
+    }
+    ReportRuns(residualLengths(bendX, bendY, 3), limit, [&](size_t i, double step) {
+      // The last few columns at either end follow the trace's end, which bends and
+      // jitters more than the rest of a correct mesh.
+      if (i + 1 >= EndColumns && i + 1 + EndColumns < columns)
+      {
+        steps.push_back({ r, i + 1, false, step });
+      }
+    });
+  }
+  // Along the axis: the in-plane step between neighbouring rows.
+  if (rows >= 3)
+  {
+    std::vector<double> shiftX(rows - 1), shiftY(rows - 1);
+    for (size_t c = 0; c < columns; ++c)
+    {
+      for (size_t r = 0; r + 1 < rows; ++r)
+      {
+        shiftX[r] = at(r + 1, c, 0) - at(r, c, 0);
+        shiftY[r] = at(r + 1, c, 1) - at(r, c, 1);
+      }
+      ReportRuns(residualLengths(shiftX, shiftY, 2), limit, [&](size_t i, double step) {
+        steps.push_back({ i, c, true, step });
+      });
+    }
+  }
+  std::sort(steps.begin(), steps.end(), [](const auto & a, const auto & b) {
+    return a.Row != b.Row ? a.Row < b.Row : a.Column < b.Column;
+  });
+  return steps;
+}
+} // namespace itk
