@@ -32,7 +32,9 @@ pydicom, PIL and tesseract are needed):
         Stability map of the segmentation: success rate on a grid of SNR x gap between
         turns (voxels), the other parameters drawn from the whole family; heat-map PNG.
 
-    sheet_stress.py rescore --out DIR --csv FILE   score a run directory's scans again
+    sheet_stress.py rescore --out DIR --csv FILE [--rerun unwrap|mesh] [--jobs N]
+                                            score a run directory's scans again (after running
+                                            the tool on them again)
     sheet_stress.py summary --csv FILE      reprint the summary table of a CSV
     sheet_stress.py selfcheck [--tool T]    the scorer against the truth itself (and T reads
                                             every format)
@@ -66,8 +68,11 @@ Scoring (in voxels; the tool writes surface.obj in the input's physical mm, mapp
 to voxels with the volume's origin and spacing):
   mesh error  distance of each mesh vertex to the true mid-surface: nearest truth sample
               (cKDTree, samples every 0.25 voxel, coarser on the largest sheets), refined
-              point-to-plane with the sample's normal and tangents; mean, p95, max
-  jumps       mesh edges whose ends' true arc lengths s differ by more than twice the
+              point-to-plane with the sample's normal and tangents; mean, p95, max over the
+              vertices inside the volume (where a field of view cuts the roll, the mesh bridges
+              the sheet outside the scan, which no scan shows; mesh_error_mean_all and
+              vertices_outside report that part)
+  jumps       mesh edges inside the volume whose ends' true arc lengths s differ by more than twice the
               edge's length plus 4 voxels (an edge between two turns)
   coverage    fraction of the true sheet inside the field of view (samples every half
               voxel in s and w) within 1 voxel of the mesh (exact point-to-triangle
@@ -1041,6 +1046,7 @@ class TruthSurface:
 
     def __init__(self, roll, dims, max_samples=3_000_000):
         self.roll = roll
+        self.dims = np.asarray(dims, dtype=np.float64)
         area = roll.area()
         self.h = max(0.25, math.sqrt(area / max_samples))
         self.samples = roll.samples(self.h)
@@ -1088,7 +1094,13 @@ def score_mesh(truth_surface, verts, faces):
     dist, s, turn, _ = truth_surface.project(verts)
     edges = mesh_edges(faces)
     length = np.linalg.norm(verts[edges[:, 0]] - verts[edges[:, 1]], axis=1)
-    jumps = np.abs(s[edges[:, 0]] - s[edges[:, 1]]) > 2.0 * length + 4.0
+    # Where a field of view cuts the roll, the mesh bridges the part of the sheet outside the
+    # scan, which no scan shows: error and jumps are measured on the mesh inside the volume
+    # (as coverage is on the true sheet inside it); the error of all vertices is kept too.
+    inside = np.all((verts >= -0.5) & (verts <= truth_surface.dims - 0.5), axis=1)
+    if not inside.any():
+        inside[:] = True
+    jumps = (np.abs(s[edges[:, 0]] - s[edges[:, 1]]) > 2.0 * length + 4.0) & inside[edges[:, 0]] & inside[edges[:, 1]]
     edge_len = float(np.median(length))
     # Jump edges with a vertex within 1.5 mesh spacings of a true end of the sheet (or beyond
     # it): the end of the trace overshooting onto the neighbouring turn.
@@ -1098,8 +1110,9 @@ def score_mesh(truth_surface, verts, faces):
     h = max(0.5, math.sqrt(max(mesh_area(verts, faces), 1.0) / 1_000_000))
     near = mesh_to_surface_distance(verts, faces, truth_surface.coverage_points, h)
     coverage = float(np.mean(near <= 1.0)) if len(near) else 0.0
-    return {"mesh_error_mean": float(dist.mean()), "mesh_error_p95": float(np.percentile(dist, 95)),
-            "mesh_error_max": float(dist.max()), "jumps": int(jumps.sum()), "jumps_at_ends": int(at_ends.sum()),
+    return {"mesh_error_mean": float(dist[inside].mean()), "mesh_error_p95": float(np.percentile(dist[inside], 95)),
+            "mesh_error_max": float(dist[inside].max()), "mesh_error_mean_all": float(dist.mean()),
+            "vertices_outside": int((~inside).sum()), "jumps": int(jumps.sum()), "jumps_at_ends": int(at_ends.sum()),
             "coverage": coverage,
             "vertices": int(len(verts)), "triangles": int(len(faces)), "median_edge": edge_len,
             "turns_touched": int(len(np.unique(turn))), "_jump_edges": edges[jumps],
@@ -1252,7 +1265,8 @@ PARAMETER_KEYS = [k for k in draw_parameters(0) if k != "seed"] + ["turns_drawn"
 FACTOR_KEYS = ["tilt_deg", "artefact", "coarse_voxels"]
 MEASURED_KEYS = ["tilt_reach", "gap_min", "gap_median", "snr_measured", "sheet_length", "outer_radius", "dimensions",
                  "fov_cut_voxels", "text", "text_fits_fov"]
-FIGURE_KEYS = ["success", "legible", "legible_text", "mesh_error_mean", "mesh_error_p95", "mesh_error_max", "jumps",
+FIGURE_KEYS = ["success", "legible", "legible_text", "mesh_error_mean", "mesh_error_p95", "mesh_error_max",
+               "mesh_error_mean_all", "vertices_outside", "jumps",
                "jumps_at_ends",
                "coverage", "cer", "cer_text", "ocr_variant", "ocr_text", "ocr_text_region", "ocr_box", "vertices",
                "triangles", "median_edge", "turns_touched"]
@@ -1296,11 +1310,15 @@ def truth_row(truth):
     return row
 
 
-def run_tool(tool, scan_dir, truth, timeout):
-    """`virtual-unwrap unwrap INPUT -o OUT -q` with default options; the outcome is also stored
-    in scan_dir/tool.json so that the scan can be scored again later."""
+def run_tool(tool, scan_dir, truth, timeout, stage="unwrap"):
+    """`virtual-unwrap unwrap INPUT -o OUT -q` (stage "mesh": `virtual-unwrap segment INPUT -o OUT`,
+    the same mesh without flattening and texturing) with default options; the outcome is also
+    stored in scan_dir/tool.json so that the scan can be scored again later."""
     out = os.path.join(scan_dir, "unwrap")
-    cmd = [tool, "unwrap", os.path.join(scan_dir, truth["volume"]["input"]), "-o", out, "-q"]
+    if stage == "mesh":
+        cmd = [tool, "segment", os.path.join(scan_dir, truth["volume"]["input"]), "-o", out]
+    else:
+        cmd = [tool, "unwrap", os.path.join(scan_dir, truth["volume"]["input"]), "-o", out, "-q"]
     cmd += truth["volume"]["tool_arguments"]
     started = time.time()
     try:
@@ -1363,6 +1381,13 @@ def score_scan(scan_dir, keep="failures", overlay=True):
     out = os.path.join(scan_dir, "unwrap")
     surface = os.path.join(out, "surface.obj")
     row["crash"] = bool(code not in (0, 1) or (code == 0 and not os.path.exists(surface)))
+    if code == 0 and os.path.exists(os.path.join(out, "segment.json")):
+        with open(os.path.join(out, "segment.json")) as f:
+            report = json.load(f)
+        row["warnings"] = " | ".join(report.get("warnings", []))[:1000]
+        row["method"] = report.get("method", "")
+        row["threshold"] = report.get("threshold", {}).get("value", "") if isinstance(report.get("threshold"), dict) \
+            else report.get("threshold", "")
     if code == 0 and os.path.exists(os.path.join(out, "report.json")):
         with open(os.path.join(out, "report.json")) as f:
             report = json.load(f)
@@ -1432,17 +1457,29 @@ def score_scan(scan_dir, keep="failures", overlay=True):
 
 
 def process_scan(seed, out_root, region="accept", small=False, tool="build/bin/virtual-unwrap", keep="failures",
-                 overrides=None, timeout=1800, extra=None):
+                 overrides=None, timeout=1800, extra=None, stage="unwrap"):
     """Generate, run and score one scan; returns its CSV row."""
     scan_dir = os.path.join(out_root, f"scan-{seed}")
     if os.path.isdir(scan_dir):
         shutil.rmtree(scan_dir)
     p = draw_parameters(seed, region, small, overrides)
     truth = generate(p, scan_dir, verbose=False)
-    run_tool(tool, scan_dir, truth, timeout)
+    run_tool(tool, scan_dir, truth, timeout, stage)
     row = score_scan(scan_dir, keep)
     row.update(extra or {})
     return row
+
+
+def _rescore_star(kwargs):
+    """Score one kept scan again, after running the tool on it again if asked."""
+    if kwargs["rerun"]:
+        with open(os.path.join(kwargs["scan_dir"], "truth.json")) as f:
+            truth = json.load(f)
+        out = os.path.join(kwargs["scan_dir"], "unwrap")
+        if os.path.isdir(out):
+            shutil.rmtree(out)
+        run_tool(kwargs["tool"], kwargs["scan_dir"], truth, 1800, kwargs["rerun"])
+    return score_scan(kwargs["scan_dir"], keep="all")
 
 
 def _process_scan_star(kwargs):
@@ -1768,6 +1805,8 @@ def main():
     r.add_argument("--keep", choices=["failures", "all", "none"], default="failures",
                    help="which scans keep their volume (outputs and truth are always kept)")
     r.add_argument("--param", action="append", metavar="KEY=VALUE", help="fix a parameter for every scan")
+    r.add_argument("--stage", choices=["unwrap", "mesh"], default="unwrap",
+                   help="unwrap: the whole tool, scored on mesh and text; mesh: `segment` only, scored on the mesh")
     r.add_argument("--timeout", type=float, default=1800.0, help="seconds per tool run")
     r.add_argument("--selfcheck", action="store_true", help="run the self-check first")
     r.add_argument("--strict", action="store_true", help="exit 2 if the tool crashed or scoring failed")
@@ -1783,10 +1822,16 @@ def main():
     m.add_argument("--tool", default="build/bin/virtual-unwrap")
     m.add_argument("--small", action="store_true")
     m.add_argument("--keep", choices=["failures", "all", "none"], default="none")
+    m.add_argument("--stage", choices=["unwrap", "mesh"], default="unwrap",
+                   help="unwrap: the whole tool, scored on mesh and text; mesh: `segment` only, scored on the mesh")
     m.add_argument("--timeout", type=float, default=1800.0)
     q = sub.add_parser("rescore", help="score the scans of a run directory again (no generation, no tool run)")
     q.add_argument("--out", required=True)
     q.add_argument("--csv", required=True)
+    q.add_argument("--rerun", choices=["unwrap", "mesh"], default=None,
+                   help="run the tool again on the kept scans first (after a change to the tool)")
+    q.add_argument("--tool", default="build/bin/virtual-unwrap")
+    q.add_argument("--jobs", type=int, default=1)
     s = sub.add_parser("summary", help="reprint the summary table of a CSV")
     s.add_argument("--csv", required=True)
     v = sub.add_parser("preview", help="PNG of a generated scan: slices and the true ink")
@@ -1804,13 +1849,16 @@ def main():
         selfcheck(args.tool)
     elif args.command == "rescore":
         dirs = sorted((d for d in os.listdir(args.out) if d.startswith("scan-")
-                       and os.path.exists(os.path.join(args.out, d, "tool.json"))), key=lambda d: int(d[5:]))
+                       and os.path.exists(os.path.join(args.out, d, "truth.json" if args.rerun else "tool.json"))),
+                      key=lambda d: int(d[5:]))
+        tasks = [dict(scan_dir=os.path.join(args.out, d), rerun=args.rerun, tool=os.path.abspath(args.tool))
+                 for d in dirs]
         rows = []
-        with open(args.csv, "w", newline="") as f:
+        with open(args.csv, "w", newline="") as f, \
+                concurrent.futures.ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
             writer = csv.DictWriter(f, fieldnames=CSV_KEYS, extrasaction="ignore", restval="")
             writer.writeheader()
-            for d in dirs:
-                row = score_scan(os.path.join(args.out, d), keep="all")
+            for d, row in zip(dirs, pool.map(_rescore_star, tasks)):
                 writer.writerow(row)
                 f.flush()
                 rows.append({k: str(v) for k, v in row.items()})
@@ -1828,7 +1876,8 @@ def main():
         csv_path = args.csv or os.path.join(args.out, "results.csv")
         overrides = parse_overrides(args.param)
         tasks = [dict(seed=args.seed + i, out_root=args.out, region=args.region, small=args.small,
-                      tool=os.path.abspath(args.tool), keep=args.keep, overrides=overrides, timeout=args.timeout)
+                      tool=os.path.abspath(args.tool), keep=args.keep, overrides=overrides, timeout=args.timeout,
+                      stage=args.stage)
                  for i in range(args.scans)]
         rows = run_scans(tasks, csv_path, args.jobs)
         rows = read_csv(csv_path)
@@ -1855,6 +1904,7 @@ def main():
                     tasks.append(dict(seed=args.seed + 1000 * (i * len(gaps) + j) + k, out_root=args.out,
                                       region="wide", small=args.small, tool=os.path.abspath(args.tool),
                                       keep=args.keep, overrides={"snr": snr, "gap": gap}, timeout=args.timeout,
+                                      stage=args.stage,
                                       extra={"map_snr": snr, "map_gap": gap}))
         run_scans(tasks, args.csv, args.jobs)
         rows = read_csv(args.csv)
