@@ -472,16 +472,20 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AlignWithRollAxis(
         origin[r] + newDirection[r][0] * lower[0] + newDirection[r][1] * lower[1] + newDirection[r][2] * lower[2];
       newSize[r] = static_cast<SizeValueType>(std::ceil((upper[r] - lower[r]) / newSpacing[r])) + 1;
     }
-    auto maskResampler = ResampleImageFilter<SheetImageType, SheetImageType>::New();
-    maskResampler->SetInput(originalMask);
-    maskResampler->SetInterpolator(NearestNeighborInterpolateImageFunction<SheetImageType>::New());
-    maskResampler->SetOutputOrigin(newOrigin);
-    maskResampler->SetOutputSpacing(newSpacing);
-    maskResampler->SetOutputDirection(newDirection);
-    maskResampler->SetSize(newSize);
-    maskResampler->SetDefaultPixelValue(0);
-    maskResampler->Update();
-    sheetMask = maskResampler->GetOutput();
+    // Binary images are resampled by nearest neighbour, 0 beyond the original box.
+    auto resampleBinary = [&](const SheetImageType * image) {
+      auto resampler = ResampleImageFilter<SheetImageType, SheetImageType>::New();
+      resampler->SetInput(image);
+      resampler->SetInterpolator(NearestNeighborInterpolateImageFunction<SheetImageType>::New());
+      resampler->SetOutputOrigin(newOrigin);
+      resampler->SetOutputSpacing(newSpacing);
+      resampler->SetOutputDirection(newDirection);
+      resampler->SetSize(newSize);
+      resampler->SetDefaultPixelValue(0);
+      resampler->Update();
+      return typename SheetImageType::Pointer(resampler->GetOutput());
+    };
+    sheetMask = resampleBinary(originalMask);
     // Where the resampled box reaches beyond the original one there is no data of the scan:
     // a sheet cut there by the field of view is unknown, not absent.
     auto inside = SheetImageType::New();
@@ -489,16 +493,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AlignWithRollAxis(
     inside->SetRegions(originalMask->GetBufferedRegion());
     inside->Allocate();
     inside->FillBuffer(1);
-    auto dataResampler = ResampleImageFilter<SheetImageType, SheetImageType>::New();
-    dataResampler->SetInput(inside);
-    dataResampler->SetInterpolator(NearestNeighborInterpolateImageFunction<SheetImageType>::New());
-    dataResampler->SetOutputOrigin(newOrigin);
-    dataResampler->SetOutputSpacing(newSpacing);
-    dataResampler->SetOutputDirection(newDirection);
-    dataResampler->SetSize(newSize);
-    dataResampler->SetDefaultPixelValue(0);
-    dataResampler->Update();
-    sheetData = dataResampler->GetOutput();
+    sheetData = resampleBinary(inside);
     if (originalIntensity)
     {
       const float * values = originalIntensity->GetBufferPointer();

@@ -435,6 +435,25 @@ public:
     double              turnOffset = 0.0;
     bool                turnKnown = false;
     std::vector<double> distances;
+    // The turns two and three revolutions before, each with its own distance to this one:
+    // where the turn before bulges onto this one (a touch), it alone would carry the bulge
+    // outwards onto the next turn; the median of the three predictions does not.
+    auto turnsBefore = [&](long step, long turns) {
+      const long back = step - (turns - 1) * m_Frame.Rays;
+      return back >= 0 ? turnBefore(back) : std::numeric_limits<double>::quiet_NaN();
+    };
+    std::vector<double> farDistances[2];
+    double              farOffset[2]{ 0.0, 0.0 };
+    bool                farKnown[2]{ false, false };
+    auto                median = [&](std::vector<double> & values, double current) {
+      const size_t window = std::max<size_t>(12, static_cast<size_t>(m_Frame.Rays / 8));
+      if (values.size() > 24 && values.size() % 4 != 0)
+      {
+        return current;
+      }
+      return Median(
+        std::vector<double>(values.end() - static_cast<std::ptrdiff_t>(std::min(window, values.size())), values.end()));
+    };
     for (long step = 1; step < maximumSteps; ++step)
     {
       radiusAt.push_back(std::numeric_limits<double>::quiet_NaN());
@@ -443,8 +462,15 @@ public:
       const Step & last = confirmed.back();
       const bool   guided = prior != nullptr && prior->Covers(m);
       const double below = turnBefore(step);
+      const double far[2] = { turnsBefore(step, 2), turnsBefore(step, 3) };
+      double       fromTurns = below + turnOffset;
+      if (farKnown[0] && farKnown[1] && std::isfinite(far[0]) && std::isfinite(far[1]))
+      {
+        std::vector<double> three{ fromTurns, far[0] + farOffset[0], far[1] + farOffset[1] };
+        fromTurns = Median(three);
+      }
       const double predicted = guided                              ? prior->At(m) + offset
-                               : turnKnown && std::isfinite(below) ? below + turnOffset
+                               : turnKnown && std::isfinite(below) ? fromTurns
                                                                    : last.Rho + slope * static_cast<double>(m - last.M);
       if (predicted <= 0.0)
       {
@@ -533,16 +559,19 @@ public:
         // Distance to the turn before: the median over the last eighth of a turn of
         // confirmed steps, so that a short stretch where two turns touch (one merged
         // crossing between them) does not pull the next prediction onto the wrong turn.
+        for (int j = 0; j < 2; ++j)
+        {
+          if (std::isfinite(far[j]))
+          {
+            farDistances[j].push_back(r - far[j]);
+            farOffset[j] = median(farDistances[j], farOffset[j]);
+            farKnown[j] = farDistances[j].size() >= 6;
+          }
+        }
         if (std::isfinite(below))
         {
           distances.push_back(r - below);
-          const size_t window = std::max<size_t>(12, static_cast<size_t>(m_Frame.Rays / 8));
-          if (distances.size() <= 24 || distances.size() % 4 == 0)
-          {
-            std::vector<double> recent(
-              distances.end() - static_cast<std::ptrdiff_t>(std::min(window, distances.size())), distances.end());
-            turnOffset = Median(recent);
-          }
+          turnOffset = median(distances, turnOffset);
           turnKnown = distances.size() >= 6;
           // Turns lie at least a sheet apart, however tightly they touch.
           const double least = 0.8 * std::max(m_Width, voxel);
