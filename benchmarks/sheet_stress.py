@@ -32,7 +32,7 @@ pydicom, PIL and tesseract are needed):
         Stability map of the segmentation: success rate on a grid of SNR x gap between
         turns (voxels), the other parameters drawn from the whole family; heat-map PNG.
 
-    sheet_stress.py rescore --out DIR --csv FILE [--rerun unwrap|mesh] [--jobs N]
+    sheet_stress.py rescore --out DIR --csv FILE [--rerun unwrap|mesh] [--jobs N] [--strict]
                                             score a run directory's scans again (after running
                                             the tool on them again)
     sheet_stress.py summary --csv FILE      reprint the summary table of a CSV
@@ -1832,6 +1832,7 @@ def main():
                    help="run the tool again on the kept scans first (after a change to the tool)")
     q.add_argument("--tool", default="build/bin/virtual-unwrap")
     q.add_argument("--jobs", type=int, default=1)
+    q.add_argument("--strict", action="store_true", help="exit 2 if the tool crashed or scoring failed")
     s = sub.add_parser("summary", help="reprint the summary table of a CSV")
     s.add_argument("--csv", required=True)
     v = sub.add_parser("preview", help="PNG of a generated scan: slices and the true ink")
@@ -1865,6 +1866,10 @@ def main():
                 print(f"{d}: success {row.get('success')} error {row.get('mesh_error_mean')} jumps {row.get('jumps')} "
                       f"coverage {row.get('coverage')} cer {row.get('cer')} cer_text {row.get('cer_text')}", flush=True)
         print(summary_table(read_csv(args.csv)))
+        bad = [r for r in rows if r.get("crash") == "True" or r.get("score_error")]
+        if args.strict and (bad or not rows):
+            print(f"{len(bad)} scan(s) with a tool crash or a scoring error, {len(rows)} scored", file=sys.stderr)
+            sys.exit(2)
     elif args.command == "summary":
         print(summary_table(read_csv(args.csv)))
     elif args.command == "run":
