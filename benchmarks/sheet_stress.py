@@ -1603,7 +1603,7 @@ def read_csv(path):
 # Stability map
 
 
-def stability_map(rows, snrs, gaps, png):
+def stability_map(rows, snrs, gaps, png, family="the whole family"):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -1626,8 +1626,8 @@ def stability_map(rows, snrs, gaps, png):
     ax.set_yticks(range(len(snrs)), [f"{s:g}" for s in snrs])
     ax.set_xlabel("gap between turns (voxels)")
     ax.set_ylabel("SNR (sheet - air) / noise sigma")
-    ax.set_title("virtual-unwrap segmentation: success rate\n(mesh error <= 0.5 voxel, 0 jumps, coverage >= 97 %)",
-                 fontsize=10)
+    ax.set_title("virtual-unwrap segmentation: success rate on " + family +
+                 "\n(mesh error <= 0.5 voxel, 0 jumps, coverage >= 97 %)", fontsize=10)
     fig.colorbar(im, ax=ax, label="success fraction")
     fig.tight_layout()
     fig.savefig(png, dpi=110)
@@ -1913,7 +1913,8 @@ def main():
                                       extra={"map_snr": snr, "map_gap": gap}))
         run_scans(tasks, args.csv, args.jobs)
         rows = read_csv(args.csv)
-        stability_map(rows, snrs, gaps, args.png)
+        stability_map(rows, snrs, gaps, args.png,
+                      "small scans (2-3.5 turns)" if args.small else "the whole family")
         print(summary_table(rows))
         print(f"\nstability map: {args.png}")
 
