@@ -39,6 +39,9 @@ constexpr double MaterialLevel = 0.5;
 constexpr double AcceptWindow = 0.4;
 // Slices averaged on each side of the seed slice.
 constexpr long SeedHalfWidth = 3;
+// How much more of its crossings another candidate seed slice's trace must explain than
+// the middle one's to be taken instead.
+constexpr double SeedPreference = 0.05;
 // Rays on which the seed slice's trace is started (at three depths each).
 constexpr long AloneRays = 8;
 // Voxels from the edge of the scan's data within which the intensities are not trusted.
@@ -1223,11 +1226,16 @@ TraceRoll(const SheetVolumeView &             volume,
     return result;
   }
   Tracer tracer(volume, values, settings);
-  tracer.BuildFrame(material);
 
-  // Seed: the middle slice with material, on the mean profile of its neighbours.
-  const size_t seed = material[material.size() / 2];
-  auto         seedCrossings = [&]() {
+  // Seed: a slice in the middle part of the sheet, traced on the mean profile of its
+  // neighbours. Two turns that touch in the seed slice would carry its trace onto the next
+  // turn, and every slice after it; a touch covers only part of the width, so three slices
+  // (at 50, 30 and 70 % of the sheet's width) are tried and the middle one is kept unless
+  // another's trace passes through clearly more of its crossings.
+  size_t         seed = material[material.size() / 2];
+  SliceCrossings crossings;
+  Tracer::Trace  seedTrace;
+  auto           seedCrossings = [&]() {
     std::vector<size_t> around;
     for (size_t k : material)
     {
@@ -1238,35 +1246,62 @@ TraceRoll(const SheetVolumeView &             volume,
     }
     return tracer.FindCrossings(seed, around);
   };
-  SliceCrossings crossings = seedCrossings();
-  tracer.MeasurePitch(crossings);
-  auto seedTrace = tracer.TraceAlone(crossings, seed);
-  // The centroid line need not pass through the spiral's centre (an irregular roll, a field
-  // of view that cuts it): re-centre on the innermost turn and trace again.
-  for (int pass = 0; pass < 2 && !seedTrace.Empty(); ++pass)
-  {
-    const long rays = tracer.Frame().Rays;
-    if (seedTrace.Last() - seedTrace.First < 3 * rays / 2)
-    {
-      break;
-    }
-    double c[2], mean[2] = { 0.0, 0.0 };
-    tracer.Centre(seed, c);
-    for (long m = seedTrace.First; m < seedTrace.First + rays; ++m)
-    {
-      const double angle = static_cast<double>(m) * tracer.Frame().Step;
-      mean[0] += seedTrace.At(m) * std::cos(angle) / static_cast<double>(rays);
-      mean[1] += seedTrace.At(m) * std::sin(angle) / static_cast<double>(rays);
-    }
-    if (std::hypot(mean[0], mean[1]) < 0.5 * settings.Voxel)
-    {
-      break;
-    }
-    tracer.SetOffset(tracer.GetOffset()[0] + mean[0], tracer.GetOffset()[1] + mean[1]);
+  auto traceSeed = [&](size_t candidate) {
+    seed = candidate;
+    tracer.SetOffset(0.0, 0.0);
     tracer.BuildFrame(material);
     crossings = seedCrossings();
     tracer.MeasurePitch(crossings);
     seedTrace = tracer.TraceAlone(crossings, seed);
+    // The centroid line need not pass through the spiral's centre (an irregular roll, a field
+    // of view that cuts it): re-centre on the innermost turn and trace again.
+    for (int pass = 0; pass < 2 && !seedTrace.Empty(); ++pass)
+    {
+      const long rays = tracer.Frame().Rays;
+      if (seedTrace.Last() - seedTrace.First < 3 * rays / 2)
+      {
+        break;
+      }
+      double c[2], mean[2] = { 0.0, 0.0 };
+      tracer.Centre(seed, c);
+      for (long m = seedTrace.First; m < seedTrace.First + rays; ++m)
+      {
+        const double angle = static_cast<double>(m) * tracer.Frame().Step;
+        mean[0] += seedTrace.At(m) * std::cos(angle) / static_cast<double>(rays);
+        mean[1] += seedTrace.At(m) * std::sin(angle) / static_cast<double>(rays);
+      }
+      if (std::hypot(mean[0], mean[1]) < 0.5 * settings.Voxel)
+      {
+        break;
+      }
+      tracer.SetOffset(tracer.GetOffset()[0] + mean[0], tracer.GetOffset()[1] + mean[1]);
+      tracer.BuildFrame(material);
+      crossings = seedCrossings();
+      tracer.MeasurePitch(crossings);
+      seedTrace = tracer.TraceAlone(crossings, seed);
+    }
+  };
+  long   seedIndex = -1, tracedIndex = -1;
+  double bestExplained = -1.0;
+  for (const double fraction : { 0.5, 0.3, 0.7 })
+  {
+    const auto index = static_cast<long>(fraction * static_cast<double>(material.size() - 1) + 0.5);
+    if (index == tracedIndex)
+    {
+      continue;
+    }
+    traceSeed(material[static_cast<size_t>(index)]);
+    tracedIndex = index;
+    const double explained = seedTrace.Empty() ? -1.0 : tracer.Explained(crossings, seedTrace);
+    if (seedIndex < 0 || explained > bestExplained + SeedPreference)
+    {
+      seedIndex = index;
+      bestExplained = explained;
+    }
+  }
+  if (seedIndex != tracedIndex)
+  {
+    traceSeed(material[static_cast<size_t>(seedIndex)]);
   }
   result.Pitch = tracer.Pitch();
   result.RayThickness = tracer.Width();
@@ -1299,7 +1334,6 @@ TraceRoll(const SheetVolumeView &             volume,
   std::vector<Tracer::Trace> traces(nz);
   const size_t               batch = 16;
   size_t                     done = 0;
-  const long                 seedIndex = static_cast<long>(material.size() / 2);
   for (int dir : { +1, -1 })
   {
     Tracer::Trace prior = seedTrace;
