@@ -479,19 +479,14 @@ public:
       {
         break;
       }
-      if (predicted > m_Frame.RMax)
+      const double x = centre[0] + predicted * std::cos(static_cast<double>(m) * m_Frame.Step);
+      const double y = centre[1] + predicted * std::sin(static_cast<double>(m) * m_Frame.Step);
+      const bool   outside = !slice.Inside(x, y);
+      // No material lies beyond the frame's reach within the scan's data; outside it (a roll
+      // cut by the field of view) the turn is carried on, as below.
+      if (predicted > m_Frame.RMax && !outside)
       {
-        // No material lies this far out within the scan's data; beyond it (a roll cut by
-        // the field of view) the turn is carried on, as below.
-        const double px = centre[0] + predicted * std::cos(static_cast<double>(m) * m_Frame.Step);
-        const double py = centre[1] + predicted * std::sin(static_cast<double>(m) * m_Frame.Step);
-        if (slice.Inside(px, py))
-        {
-          break;
-        }
-        steps.push_back({ m, predicted, false });
-        radiusAt.back() = predicted;
-        continue;
+        break;
       }
       const auto & list = crossings.Rays[a];
       // The last accepted radius, carried to this step along the shape of the turn before
@@ -614,9 +609,6 @@ public:
         }
         continue;
       }
-      const double x = centre[0] + predicted * std::cos(static_cast<double>(m) * m_Frame.Step);
-      const double y = centre[1] + predicted * std::sin(static_cast<double>(m) * m_Frame.Step);
-      const bool   outside = !slice.Inside(x, y);
       if (outside || slice.Value(x, y, m_Settings.AirLevel) >= material)
       {
         // Material without a separate crossing, or the sheet out of the field of view
@@ -1247,12 +1239,15 @@ TraceRoll(const SheetVolumeView &             volume,
     return tracer.FindCrossings(seed, around);
   };
   auto traceSeed = [&](size_t candidate) {
+    auto traceAtOffset = [&](double x, double y) {
+      tracer.SetOffset(x, y);
+      tracer.BuildFrame(material);
+      crossings = seedCrossings();
+      tracer.MeasurePitch(crossings);
+      seedTrace = tracer.TraceAlone(crossings, seed);
+    };
     seed = candidate;
-    tracer.SetOffset(0.0, 0.0);
-    tracer.BuildFrame(material);
-    crossings = seedCrossings();
-    tracer.MeasurePitch(crossings);
-    seedTrace = tracer.TraceAlone(crossings, seed);
+    traceAtOffset(0.0, 0.0);
     // The centroid line need not pass through the spiral's centre (an irregular roll, a field
     // of view that cuts it): re-centre on the innermost turn and trace again.
     for (int pass = 0; pass < 2 && !seedTrace.Empty(); ++pass)
@@ -1262,8 +1257,7 @@ TraceRoll(const SheetVolumeView &             volume,
       {
         break;
       }
-      double c[2], mean[2] = { 0.0, 0.0 };
-      tracer.Centre(seed, c);
+      double mean[2] = { 0.0, 0.0 };
       for (long m = seedTrace.First; m < seedTrace.First + rays; ++m)
       {
         const double angle = static_cast<double>(m) * tracer.Frame().Step;
@@ -1274,11 +1268,7 @@ TraceRoll(const SheetVolumeView &             volume,
       {
         break;
       }
-      tracer.SetOffset(tracer.GetOffset()[0] + mean[0], tracer.GetOffset()[1] + mean[1]);
-      tracer.BuildFrame(material);
-      crossings = seedCrossings();
-      tracer.MeasurePitch(crossings);
-      seedTrace = tracer.TraceAlone(crossings, seed);
+      traceAtOffset(tracer.GetOffset()[0] + mean[0], tracer.GetOffset()[1] + mean[1]);
     }
   };
   long   seedIndex = -1, tracedIndex = -1;
