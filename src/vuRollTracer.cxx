@@ -16,6 +16,7 @@
  *
  *=========================================================================*/
 #include "vuRollTracer.h"
+#include "vuSpiralPath.h"
 
 #include "itkMultiThreaderBase.h"
 
@@ -171,6 +172,8 @@ struct SliceCrossings
 class Tracer
 {
 public:
+  using Trace = SpiralTrace;
+
   Tracer(const SheetVolumeView & volume, const float * values, const Settings & settings)
     : m_Volume(volume)
     , m_Values(values)
@@ -242,12 +245,20 @@ public:
     return m_Frame;
   }
 
-  // Peaks of the mean profile of `slices` along every ray about the centre of `centreSlice`.
-  SliceCrossings
-  FindCrossings(size_t centreSlice, const std::vector<size_t> & slices) const
+  // The mean of `slices` on the polar frame about the centre of `centreSlice`, as a fraction
+  // of the contrast; with `markNoData`, the samples where the scan holds no data are marked.
+  PolarSlice
+  Sample(size_t centreSlice, const std::vector<size_t> & slices, bool markNoData) const
   {
-    SliceCrossings result;
-    result.Rays.resize(static_cast<size_t>(m_Frame.Rays));
+    PolarSlice polar;
+    polar.Rays = m_Frame.Rays;
+    polar.Samples = static_cast<long>(m_Frame.Samples);
+    polar.Dr = m_Frame.Dr;
+    polar.Values.resize(static_cast<size_t>(polar.Rays) * m_Frame.Samples);
+    if (markNoData && m_Volume.Data != nullptr)
+    {
+      polar.Known.assign(polar.Values.size(), 1);
+    }
     std::vector<ValueSlice> samplers;
     for (size_t k : slices)
     {
@@ -255,33 +266,91 @@ public:
     }
     double c[2];
     Centre(centreSlice, c);
-    const double        air = m_Settings.AirLevel;
-    std::vector<double> profile(m_Frame.Samples);
+    const double air = m_Settings.AirLevel;
     for (long a = 0; a < m_Frame.Rays; ++a)
     {
       const double direction[2] = { std::cos(a * m_Frame.Step), std::sin(a * m_Frame.Step) };
+      const auto   row = static_cast<size_t>(a * polar.Samples);
       for (size_t j = 0; j < m_Frame.Samples; ++j)
       {
         const double r = static_cast<double>(j) * m_Frame.Dr;
+        const double x = c[0] + r * direction[0], y = c[1] + r * direction[1];
         double       sum = 0.0;
         for (const ValueSlice & sampler : samplers)
         {
-          sum += sampler.Value(c[0] + r * direction[0], c[1] + r * direction[1], air);
+          sum += sampler.Value(x, y, air);
         }
-        profile[j] = sum / static_cast<double>(samplers.size());
+        polar.Values[row + j] = static_cast<float>((sum / static_cast<double>(samplers.size()) - air) / m_Contrast);
+        if (!polar.Known.empty() && !samplers.front().Inside(x, y))
+        {
+          polar.Known[row + j] = 0;
+        }
       }
-      result.Rays[static_cast<size_t>(a)] = Peaks(profile);
+    }
+    return polar;
+  }
+
+  // Peaks of every ray's profile.
+  SliceCrossings
+  FindCrossings(const PolarSlice & polar) const
+  {
+    SliceCrossings result;
+    result.Rays.resize(static_cast<size_t>(m_Frame.Rays));
+    for (long a = 0; a < m_Frame.Rays; ++a)
+    {
+      const auto begin = polar.Values.begin() + a * polar.Samples;
+      result.Rays[static_cast<size_t>(a)] = Peaks(std::vector<double>(begin, begin + polar.Samples));
     }
     return result;
   }
 
-  // Local maxima of a profile that rise above air by PeakLevel of the contrast and stand out
+  // The trace of a slice again, turn by turn as minimal paths bounded by the turn before,
+  // from a turn of `reference` (the slice's own first trace, or its neighbour's trace);
+  // empty where that does not hold (not a spiral, a turn not found). A neighbour's trace
+  // is followed from its middle turn; the slice's own first trace may have crossed
+  // between turns anywhere, so with `crossings` the turns at a quarter, half and three
+  // quarters of it are tried and the trace that passes through most crossings is kept.
+  Trace
+  TracePaths(const PolarSlice & polar, const Trace & reference, const SliceCrossings * crossings = nullptr) const
+  {
+    // Only a spiral: a trace that grows by a turn spacing every turn, or by two where it
+    // crossed onto the next turn.
+    const double growth = MedianGrowth(reference);
+    if (reference.Empty() || growth < 0.6 * m_Pitch || growth > 2.5 * m_Pitch)
+    {
+      return Trace{};
+    }
+    SpiralPathSettings settings;
+    settings.Width = m_Width;
+    settings.Pitch = m_Pitch;
+    settings.Voxel = m_Settings.Voxel;
+    const long length = reference.Last() - reference.First;
+    if (crossings == nullptr)
+    {
+      return TraceSpiralPath(polar, reference, reference.First + length / 2, settings);
+    }
+    Trace  best;
+    double bestExplained = -1.0;
+    for (const long quarter : { 2L, 1L, 3L })
+    {
+      Trace        trace = TraceSpiralPath(polar, reference, reference.First + quarter * length / 4, settings);
+      const double explained = trace.Empty() ? -1.0 : Explained(*crossings, trace);
+      if (explained > bestExplained)
+      {
+        best = std::move(trace);
+        bestExplained = explained;
+      }
+    }
+    return best;
+  }
+
+  // Local maxima of a profile (fraction of the contrast) that rise above air by PeakLevel of the contrast and stand out
   // of their dips by PeakProminence; each placed at the centroid of its upper half.
   std::vector<Crossing>
   Peaks(const std::vector<double> & p) const
   {
-    const double      level = m_Settings.AirLevel + PeakLevel * m_Contrast;
-    const double      prominence = PeakProminence * m_Contrast;
+    const double      level = PeakLevel;
+    const double      prominence = PeakProminence;
     const long        n = static_cast<long>(p.size());
     std::vector<long> peaks;
     // Within a voxel of the centre every ray sees the same material: no crossing there.
@@ -320,7 +389,7 @@ public:
       const double right = *std::min_element(p.begin() + j, p.begin() + hi + 1);
       // Weights above the higher of the dips beside the peak and the air/material midpoint:
       // the whole crossing, sub-voxel, but not its neighbours' flanks.
-      const double half = std::max({ left, right, m_Settings.AirLevel + MaterialLevel * m_Contrast });
+      const double half = std::max({ left, right, MaterialLevel });
       long         first = j, last = j;
       while (first > lo && p[first - 1] > half)
       {
@@ -342,33 +411,6 @@ public:
     return crossings;
   }
 
-  // A trace dense in the angular index: Rho[i] is the radius at m = First + i.
-  struct Trace
-  {
-    long                First{ 0 };
-    std::vector<double> Rho;
-    std::vector<char>   Confirmed;
-    bool
-    Empty() const
-    {
-      return Rho.empty();
-    }
-    long
-    Last() const
-    {
-      return First + static_cast<long>(Rho.size()) - 1;
-    }
-    bool
-    Covers(long m) const
-    {
-      return !Rho.empty() && m >= First && m <= Last();
-    }
-    double
-    At(long m) const
-    {
-      return Rho[static_cast<size_t>(m - First)];
-    }
-  };
 
   // Radial distance to the neighbouring turns of a trace at m (0 where it has none).
   double
@@ -763,6 +805,24 @@ public:
       }
     }
     return Trace{};
+  }
+
+  // Median radial growth of a trace per turn (0 for a trace shorter than a turn).
+  double
+  MedianGrowth(const Trace & trace) const
+  {
+    std::vector<double> growth;
+    for (long m = trace.First; m + m_Frame.Rays <= trace.Last(); ++m)
+    {
+      growth.push_back(trace.At(m + m_Frame.Rays) - trace.At(m));
+    }
+    return growth.empty() ? 0.0 : std::abs(Median(growth));
+  }
+  bool
+  GrowsByPitch(const Trace & trace) const
+  {
+    const double growth = MedianGrowth(trace);
+    return growth >= 0.6 * m_Pitch && growth <= 1.6 * m_Pitch;
   }
 
   // Median spacing of successive crossings and median crossing width.
@@ -1227,24 +1287,30 @@ TraceRoll(const SheetVolumeView &             volume,
   size_t         seed = material[material.size() / 2];
   SliceCrossings crossings;
   Tracer::Trace  seedTrace;
-  auto           seedCrossings = [&]() {
-    std::vector<size_t> around;
+  auto           around = [&]() {
+    std::vector<size_t> slices;
     for (size_t k : material)
     {
       if (std::abs(static_cast<long>(k) - static_cast<long>(seed)) <= SeedHalfWidth)
       {
-        around.push_back(k);
+        slices.push_back(k);
       }
     }
-    return tracer.FindCrossings(seed, around);
+    return slices;
   };
   auto traceSeed = [&](size_t candidate) {
     auto traceAtOffset = [&](double x, double y) {
       tracer.SetOffset(x, y);
       tracer.BuildFrame(material);
-      crossings = seedCrossings();
+      const PolarSlice polar = tracer.Sample(seed, around(), true);
+      crossings = tracer.FindCrossings(polar);
       tracer.MeasurePitch(crossings);
       seedTrace = tracer.TraceAlone(crossings, seed);
+      Tracer::Trace paths = tracer.TracePaths(polar, seedTrace, &crossings);
+      if (!paths.Empty())
+      {
+        seedTrace = std::move(paths);
+      }
     };
     seed = candidate;
     traceAtOffset(0.0, 0.0);
@@ -1305,16 +1371,11 @@ TraceRoll(const SheetVolumeView &             volume,
     static_cast<double>(seedTrace.Last() - seedTrace.First) / static_cast<double>(tracer.Frame().Rays);
   result.Explained = tracer.Explained(crossings, seedTrace);
   // A spiral moves outwards by about a turn spacing per turn; a curve circling the centre
-  // (a flat or folded sheet through it) does not.
-  std::vector<double> growth;
-  for (long m = seedTrace.First; m + tracer.Frame().Rays <= seedTrace.Last(); ++m)
-  {
-    growth.push_back(seedTrace.At(m + tracer.Frame().Rays) - seedTrace.At(m));
-  }
-  // Noise adds crossings no trace explains: a trace of two turns or more that grows by the
-  // turn spacing every turn is a spiral with fewer of them explained.
-  const double medianGrowth = growth.empty() ? 0.0 : std::abs(Median(growth));
-  const bool   growsByPitch = medianGrowth >= 0.6 * tracer.Pitch() && medianGrowth <= 1.6 * tracer.Pitch();
+  // (a flat or folded sheet through it) does not. Noise adds crossings no trace explains: a
+  // trace of two turns or more that grows by the turn spacing every turn is a spiral with
+  // fewer of them explained.
+  const double medianGrowth = tracer.MedianGrowth(seedTrace);
+  const bool   growsByPitch = tracer.GrowsByPitch(seedTrace);
   result.Rolled = turns >= 1.0 && medianGrowth >= std::max(settings.Voxel, 0.5 * tracer.Width()) &&
                   (result.Explained >= 0.6 || (turns >= 2.0 && growsByPitch && result.Explained >= 0.4));
   progress(0.1);
@@ -1336,11 +1397,23 @@ TraceRoll(const SheetVolumeView &             volume,
         slices.push_back(material[static_cast<size_t>(r)]);
       }
       std::vector<SliceCrossings> found(slices.size());
+      std::vector<PolarSlice>     polars(slices.size());
       MultiThreaderBase::New()->ParallelizeArray(
-        0, slices.size(), [&](SizeValueType i) { found[i] = tracer.FindCrossings(slices[i], { slices[i] }); }, nullptr);
+        0,
+        slices.size(),
+        [&](SizeValueType i) {
+          polars[i] = tracer.Sample(slices[i], { slices[i] }, true);
+          found[i] = tracer.FindCrossings(polars[i]);
+        },
+        nullptr);
       for (size_t i = 0; i < slices.size(); ++i)
       {
-        traces[slices[i]] = tracer.TraceGuided(found[i], slices[i], prior);
+        // Turn by turn from the neighbour's trace; the crossing follower where that fails.
+        traces[slices[i]] = tracer.TracePaths(polars[i], prior);
+        if (traces[slices[i]].Empty())
+        {
+          traces[slices[i]] = tracer.TraceGuided(found[i], slices[i], prior);
+        }
         if (traces[slices[i]].Empty())
         {
           continue;
