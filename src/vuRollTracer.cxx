@@ -43,6 +43,9 @@ constexpr long SeedHalfWidth = 3;
 // How much more of its crossings another candidate seed slice's trace must explain than
 // the middle one's to be taken instead.
 constexpr double SeedPreference = 0.05;
+// How much more of the seed slice's crossings its trace turn by turn (minimal paths) must
+// explain than the crossing follower's to be taken instead.
+constexpr double PathsPreference = 0.02;
 // Rays on which the seed slice's trace is started (at three depths each).
 constexpr long AloneRays = 8;
 // Voxels from the edge of the scan's data within which the intensities are not trusted.
@@ -305,13 +308,12 @@ public:
   }
 
   // The trace of a slice again, turn by turn as minimal paths bounded by the turn before,
-  // from a turn of `reference` (the slice's own first trace, or its neighbour's trace);
-  // empty where that does not hold (not a spiral, a turn not found). A neighbour's trace
-  // is followed from its middle turn; the slice's own first trace may have crossed
-  // between turns anywhere, so with `crossings` the turns at a quarter, half and three
-  // quarters of it are tried and the trace that passes through most crossings is kept.
+  // from a turn of its first trace `reference`; empty where that does not hold (not a
+  // spiral, a turn not found). The first trace may have crossed between turns anywhere, so
+  // the turns at a quarter, half and three quarters of it are tried and the trace that
+  // passes through most crossings is kept.
   Trace
-  TracePaths(const PolarSlice & polar, const Trace & reference, const SliceCrossings * crossings = nullptr) const
+  TracePaths(const PolarSlice & polar, const Trace & reference, const SliceCrossings & crossings) const
   {
     // Only a spiral: a trace that grows by a turn spacing every turn, or by two where it
     // crossed onto the next turn.
@@ -325,16 +327,12 @@ public:
     settings.Pitch = m_Pitch;
     settings.Voxel = m_Settings.Voxel;
     const long length = reference.Last() - reference.First;
-    if (crossings == nullptr)
-    {
-      return TraceSpiralPath(polar, reference, reference.First + length / 2, settings);
-    }
-    Trace  best;
-    double bestExplained = -1.0;
+    Trace      best;
+    double     bestExplained = -1.0;
     for (const long quarter : { 2L, 1L, 3L })
     {
       Trace        trace = TraceSpiralPath(polar, reference, reference.First + quarter * length / 4, settings);
-      const double explained = trace.Empty() ? -1.0 : Explained(*crossings, trace);
+      const double explained = trace.Empty() ? -1.0 : Explained(crossings, trace);
       if (explained > bestExplained)
       {
         best = std::move(trace);
@@ -1306,8 +1304,12 @@ TraceRoll(const SheetVolumeView &             volume,
       crossings = tracer.FindCrossings(polar);
       tracer.MeasurePitch(crossings);
       seedTrace = tracer.TraceAlone(crossings, seed);
-      Tracer::Trace paths = tracer.TracePaths(polar, seedTrace, &crossings);
-      if (!paths.Empty())
+      // The same slice turn by turn as minimal paths (TracePaths), kept where it passes
+      // through clearly more of the crossings: where the follower crossed onto the next turn
+      // at a touch and lost the rest of the one it was on.
+      Tracer::Trace paths = tracer.TracePaths(polar, seedTrace, crossings);
+      if (!paths.Empty() &&
+          tracer.Explained(crossings, paths) > tracer.Explained(crossings, seedTrace) + PathsPreference)
       {
         seedTrace = std::move(paths);
       }
@@ -1397,23 +1399,14 @@ TraceRoll(const SheetVolumeView &             volume,
         slices.push_back(material[static_cast<size_t>(r)]);
       }
       std::vector<SliceCrossings> found(slices.size());
-      std::vector<PolarSlice>     polars(slices.size());
       MultiThreaderBase::New()->ParallelizeArray(
         0,
         slices.size(),
-        [&](SizeValueType i) {
-          polars[i] = tracer.Sample(slices[i], { slices[i] }, true);
-          found[i] = tracer.FindCrossings(polars[i]);
-        },
+        [&](SizeValueType i) { found[i] = tracer.FindCrossings(tracer.Sample(slices[i], { slices[i] }, false)); },
         nullptr);
       for (size_t i = 0; i < slices.size(); ++i)
       {
-        // Turn by turn from the neighbour's trace; the crossing follower where that fails.
-        traces[slices[i]] = tracer.TracePaths(polars[i], prior);
-        if (traces[slices[i]].Empty())
-        {
-          traces[slices[i]] = tracer.TraceGuided(found[i], slices[i], prior);
-        }
+        traces[slices[i]] = tracer.TraceGuided(found[i], slices[i], prior);
         if (traces[slices[i]].Empty())
         {
           continue;

@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <deque>
+#include <iterator>
 #include <limits>
 
 namespace itk {
@@ -30,21 +31,30 @@ constexpr double MaterialLevel = 0.5;
 // Where the path is pressed against its bound it may run on the flank of the turn before:
 // it counts as on the sheet only this bright (a touch), not on a flank.
 constexpr double PressedLevel = 0.75;
+// ... and stand out of the gaps beside it by this fraction of the sheet measure's median on
+// the reference turn: noise and streaks near the axis, brighter than air but not a sheet,
+// do not count.
+constexpr double RidgeLevel = 0.4;
 // Cost of moving one radial sample sideways of the shape of the turn before.
 constexpr double MovePenalty = 1.0;
 // Samples the path may move per angular step beyond the move of the turn before.
 constexpr long MaximumMove = 4;
 // Cost of a sample where the scan holds no data: neither sheet nor air.
 constexpr double NoDataCost = 0.5;
-// Voxels of arc in air (without a sheet sample between them) that end the sheet.
+// Voxels of arc in air (without a sheet sample between them) that end the sheet, where the
+// path beyond finds the sheet on less than TailOnSheet of its steps.
 constexpr double EndArc = 3.0;
+constexpr double TailOnSheet = 0.3;
 // The path keeps this fraction of the sheet's thickness away from the turn before, and
-// lies at most this many turn spacings from it (the median spacing of the slice); where
+// lies at most MostApart turn spacings (the median spacing of the slice) from it; where
 // the turn before that is known too, at most LocalApart times the spacing between the two
-// (along a quarter turn) from that one: the turn after next lies three spacings from it.
-constexpr double LeastApart = 0.8;
+// (along a quarter turn) from that one (the turn after next lies three spacings from
+// it), and where it is not, at most NearApart spacings from the turn before (the turn after
+// next lies two spacings from it).
+constexpr double LeastApart = 0.5;
 constexpr double MostApart = 2.5;
 constexpr double LocalApart = 2.5;
+constexpr double NearApart = 1.6;
 // The reference turn is traced again within this fraction of the turn spacing of itself.
 constexpr double Window = 0.4;
 
@@ -52,6 +62,8 @@ struct TurnPath
 {
   std::vector<double> Rho;
   std::vector<char>   Confirmed;
+  // The sheet measure along the path.
+  std::vector<double> Measure;
   bool                Ended{ false };
 };
 
@@ -127,11 +139,13 @@ TraceTurn(const PolarSlice &          slice,
           const std::vector<double> & beyond,
           int                         side,
           double                      startRho,
+          double                      ridgeLevel,
           const SpiralPathSettings &  settings)
 {
   const double dr = slice.Dr;
   const double least = LeastApart * std::max(settings.Width, settings.Voxel);
   const double most = std::max(MostApart * settings.Pitch, least + 2.0 * settings.Voxel);
+  const double near = std::max(NearApart * settings.Pitch, least + 2.0 * settings.Voxel);
   const double window = std::max(Window * settings.Pitch, settings.Voxel);
   const long   centre = static_cast<long>(std::ceil(settings.Voxel / dr));
   const auto   n = static_cast<long>(bound.size());
@@ -158,8 +172,10 @@ TraceTurn(const PolarSlice &          slice,
   {
     const double b = bound[static_cast<size_t>(i)];
     // side 0: the path keeps within a window about `bound` itself.
-    double low = side > 0 ? b + least : side < 0 ? b - most : b - window;
-    double high = side > 0 ? b + most : side < 0 ? b - least : b + window;
+    // Without the turn beyond the bound, at most NearApart spacings from it.
+    const double far = beyond.empty() ? near : most;
+    double       low = side > 0 ? b + least : side < 0 ? b - far : b - window;
+    double       high = side > 0 ? b + far : side < 0 ? b - least : b + window;
     if (!beyond.empty() && side != 0)
     {
       const double reach = LocalApart * localSpacing[static_cast<size_t>(i)];
@@ -237,10 +253,8 @@ TraceTurn(const PolarSlice &          slice,
       from[static_cast<size_t>(i)][static_cast<size_t>(j[static_cast<size_t>(i)] - lo[static_cast<size_t>(i)])];
   }
 
-  // Sub-sample radius at the peak of the profile; the sheet ends after EndArc of air.
+  // Sub-sample radius at the peak of the profile.
   const auto reach = static_cast<long>(std::ceil(0.5 * settings.Width / dr));
-  double     missed = 0.0;
-  long       lastOnSheet = -1;
   for (long i = 0; i < steps; ++i)
   {
     const long m = m0 + dir * i;
@@ -270,23 +284,41 @@ TraceTurn(const PolarSlice &          slice,
       }
     }
     path.Rho.push_back(rho);
+    path.Measure.push_back(peak);
     const bool pressed = side > 0   ? ji <= lo[static_cast<size_t>(i)] + 1
                          : side < 0 ? ji >= hi[static_cast<size_t>(i)] - 1
                                     : false;
-    const bool onSheet = std::isfinite(v) && v >= (pressed ? PressedLevel : MaterialLevel);
-    path.Confirmed.push_back(onSheet ? 1 : 0);
-    if (onSheet || std::isnan(v))
+    const bool onSheet = std::isfinite(v) && v >= (pressed ? PressedLevel : MaterialLevel) && peak >= ridgeLevel;
+    // No data: neither sheet nor air (2).
+    path.Confirmed.push_back(onSheet ? 1 : std::isnan(v) ? 2 : 0);
+  }
+
+  // The sheet ends where EndArc of air begins after which the path finds the sheet on less
+  // than TailOnSheet of its steps (a faint stretch or a touch is followed by sheet again;
+  // the end of the sheet by air). The reference turn (side 0) is followed whole.
+  std::vector<double> onSheetAfter(static_cast<size_t>(steps + 1), 0.0), countedAfter(onSheetAfter.size(), 0.0);
+  for (long i = steps - 1; i >= 0; --i)
+  {
+    const char c = path.Confirmed[static_cast<size_t>(i)];
+    onSheetAfter[static_cast<size_t>(i)] = onSheetAfter[static_cast<size_t>(i + 1)] + (c == 1 ? 1.0 : 0.0);
+    countedAfter[static_cast<size_t>(i)] = countedAfter[static_cast<size_t>(i + 1)] + (c != 2 ? 1.0 : 0.0);
+  }
+  double missed = 0.0;
+  long   lastOnSheet = -1, runStart = 0;
+  for (long i = 0; i < steps && side != 0; ++i)
+  {
+    const char c = path.Confirmed[static_cast<size_t>(i)];
+    if (c != 0)
     {
-      if (onSheet)
-      {
-        lastOnSheet = i;
-      }
+      lastOnSheet = c == 1 ? i : lastOnSheet;
       missed = 0.0;
       continue;
     }
-    missed += rho * step;
-    // The reference turn (side 0) is followed whole: it may cross a gap where it was wrong.
-    if (side != 0 && missed > EndArc * settings.Voxel)
+    runStart = missed == 0.0 ? i : runStart;
+    missed += path.Rho[static_cast<size_t>(i)] * step;
+    const auto   tail = static_cast<size_t>(runStart);
+    const double fraction = countedAfter[tail] > 0.0 ? onSheetAfter[tail] / countedAfter[tail] : 0.0;
+    if (missed > EndArc * settings.Voxel && fraction < TailOnSheet)
     {
       path.Ended = true;
       break;
@@ -297,6 +329,11 @@ TraceTurn(const PolarSlice &          slice,
     path.Ended = true;
     path.Rho.resize(static_cast<size_t>(lastOnSheet + 1));
     path.Confirmed.resize(path.Rho.size());
+    path.Measure.resize(path.Rho.size());
+  }
+  for (char & c : path.Confirmed)
+  {
+    c = c == 1 ? 1 : 0;
   }
   return path;
 }
@@ -327,11 +364,15 @@ TraceSpiralPath(const PolarSlice &         slice,
   const long         first = std::clamp(sense * centre - rays / 2, kFirst, kLast + 1 - rays);
   std::deque<double> rho;
   std::deque<char>   confirmed;
-  const double       spacing = std::max(settings.Pitch, settings.Width);
-  const PolarSlice   measure = SheetMeasure(slice,
-                                          std::max(1L, std::lround(0.5 * settings.Width / slice.Dr)),
+  double             ridgeLevel = 0.0;
+  const double       spacing = settings.Pitch;
+  // Windows scaled by the turn spacing (the crossing width of a blurred sheet over a bright
+  // background can reach the spacing): a quarter spacing on both sides of the sample, the
+  // flanks an eighth of it on both sides of the middle of the gaps.
+  const PolarSlice measure = SheetMeasure(slice,
+                                          std::max(1L, std::lround(0.25 * spacing / slice.Dr)),
                                           std::max(1L, std::lround(0.5 * spacing / slice.Dr)),
-                                          std::max(1L, std::lround(0.25 * (spacing - settings.Width) / slice.Dr)));
+                                          std::max(1L, std::lround(0.125 * spacing / slice.Dr)));
   {
     std::vector<double> bound;
     for (long k = first; k < first + rays; ++k)
@@ -339,13 +380,17 @@ TraceSpiralPath(const PolarSlice &         slice,
       bound.push_back(reference.At(sense * k));
     }
     const TurnPath turn =
-      TraceTurn(slice, measure, sense * first, static_cast<int>(sense), bound, {}, 0, bound.front(), settings);
+      TraceTurn(slice, measure, sense * first, static_cast<int>(sense), bound, {}, 0, bound.front(), 0.0, settings);
     if (turn.Rho.size() < static_cast<size_t>(rays))
     {
       return SpiralTrace{};
     }
     rho.assign(turn.Rho.begin(), turn.Rho.end());
     confirmed.assign(turn.Confirmed.begin(), turn.Confirmed.end());
+    std::vector<double> levels;
+    std::copy_if(
+      turn.Measure.begin(), turn.Measure.end(), std::back_inserter(levels), [](double v) { return std::isfinite(v); });
+    ridgeLevel = levels.empty() ? 0.0 : RidgeLevel * std::max(0.0, Median(levels));
   }
   long start = first; // k of rho.front()
 
@@ -361,8 +406,16 @@ TraceSpiralPath(const PolarSlice &         slice,
         beyond.push_back(rho[static_cast<size_t>(2 * rays - 1 - i)]);
       }
     }
-    const TurnPath turn = TraceTurn(
-      slice, measure, sense * (start - 1), static_cast<int>(-sense), bound, beyond, -1, rho.front(), settings);
+    const TurnPath turn = TraceTurn(slice,
+                                    measure,
+                                    sense * (start - 1),
+                                    static_cast<int>(-sense),
+                                    bound,
+                                    beyond,
+                                    -1,
+                                    rho.front(),
+                                    ridgeLevel,
+                                    settings);
     for (size_t i = 0; i < turn.Rho.size(); ++i)
     {
       rho.push_front(turn.Rho[i]);
@@ -395,6 +448,7 @@ TraceSpiralPath(const PolarSlice &         slice,
                                     beyond,
                                     +1,
                                     rho.back(),
+                                    ridgeLevel,
                                     settings);
     rho.insert(rho.end(), turn.Rho.begin(), turn.Rho.end());
     confirmed.insert(confirmed.end(), turn.Confirmed.begin(), turn.Confirmed.end());
