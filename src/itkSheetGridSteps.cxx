@@ -16,6 +16,7 @@
  *
  *=========================================================================*/
 #include "itkSheetMidSurfaceExtractor.h"
+#include "vuMedian.h"
 
 #include <algorithm>
 #include <cmath>
@@ -25,25 +26,14 @@ namespace {
 // Columns at either end of a row left out of the check along the sheet.
 constexpr size_t EndColumns = 6;
 
-double
-MedianOf(std::vector<double> values)
-{
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
-
 // Residual of each value against the median of the values within `half` of it.
 std::vector<double>
 Residuals(const std::vector<double> & values, long half)
 {
-  const auto          n = static_cast<long>(values.size());
-  std::vector<double> residual(values.size(), 0.0);
-  for (long i = 0; i < n; ++i)
+  std::vector<double> residual = RollTracing::RunningMedian(values, half);
+  for (size_t i = 0; i < values.size(); ++i)
   {
-    const long first = std::max(0L, i - half), last = std::min(n - 1, i + half);
-    residual[static_cast<size_t>(i)] =
-      values[static_cast<size_t>(i)] - MedianOf(std::vector<double>(values.begin() + first, values.begin() + last + 1));
+    residual[i] = values[i] - residual[i];
   }
   return residual;
 }

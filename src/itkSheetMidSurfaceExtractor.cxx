@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "itkSheetMidSurfaceExtractor.h"
 
+#include "vuMedian.h"
 #include "vuRollTracer.h"
 
 #include "itkBinaryThinningImageFilter.h"
@@ -108,17 +109,7 @@ constexpr double GridStepFraction = 0.7;
 // A planar curve as x, y pairs (mm).
 using Polyline = std::vector<double>;
 
-double
-Median(std::vector<double> values)
-{
-  if (values.empty())
-  {
-    return 0.0;
-  }
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
+using RollTracing::Median;
 
 double
 Percentile(std::vector<double> values, double fraction)

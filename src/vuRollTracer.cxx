@@ -16,6 +16,7 @@
  *
  *=========================================================================*/
 #include "vuRollTracer.h"
+#include "vuMedian.h"
 #include "vuSpiralPath.h"
 
 #include "itkMultiThreaderBase.h"
@@ -50,18 +51,6 @@ constexpr double PathsPreference = 0.02;
 constexpr long AloneRays = 8;
 // Voxels from the edge of the scan's data within which the intensities are not trusted.
 constexpr long DataMargin = 3;
-
-double
-Median(std::vector<double> values)
-{
-  if (values.empty())
-  {
-    return 0.0;
-  }
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
 
 // Least-squares line y = intercept + slope x through the points added.
 struct LineFit

@@ -16,6 +16,7 @@
  *
  *=========================================================================*/
 #include "vuSpiralPath.h"
+#include "vuMedian.h"
 
 #include <algorithm>
 #include <deque>
@@ -66,29 +67,6 @@ struct TurnPath
   std::vector<double> Measure;
   bool                Ended{ false };
 };
-
-double
-Median(std::vector<double> values)
-{
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
-
-// The shape of the turn before (an ellipse, an irregular section): its running median,
-// without the short bumps where it touches a neighbour.
-std::vector<double>
-Shape(const std::vector<double> & bound, long halfWindow)
-{
-  const auto          n = static_cast<long>(bound.size());
-  std::vector<double> shape(bound.size(), 0.0);
-  for (long i = 0; i < n; ++i)
-  {
-    const long lo = std::max(0L, i - halfWindow), hi = std::min(n - 1, i + halfWindow);
-    shape[static_cast<size_t>(i)] = Median(std::vector<double>(bound.begin() + lo, bound.begin() + hi + 1));
-  }
-  return shape;
-}
 
 // A sheet measure along each ray: the mean over a sheet's thickness about a sample minus
 // the mean over the middle of the gaps on both sides, half a turn spacing away (the samples
@@ -150,14 +128,14 @@ TraceTurn(const PolarSlice &          slice,
   const long   centre = static_cast<long>(std::ceil(settings.Voxel / dr));
   const auto   n = static_cast<long>(bound.size());
   const double step = 2.0 * Pi / static_cast<double>(slice.Rays);
-  const auto   shape = Shape(bound, std::max(8L, slice.Rays / 32));
+  const auto   shape = RunningMedian(bound, std::max(8L, slice.Rays / 32));
   // `beyond`: the turn on the far side of `bound`, and the spacing between the two.
   std::vector<double> localSpacing;
   for (size_t i = 0; i < beyond.size(); ++i)
   {
     localSpacing.push_back(std::abs(bound[i] - beyond[i]));
   }
-  localSpacing = Shape(localSpacing, std::max(8L, slice.Rays / 8));
+  localSpacing = RunningMedian(localSpacing, std::max(8L, slice.Rays / 8));
   auto cost = [&](long i, long j) {
     const double v = measure.At(m0 + dir * i, j);
     return std::isnan(v) ? NoDataCost : 1.0 - std::clamp(v, 0.0, 1.0);

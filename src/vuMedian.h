@@ -1,0 +1,57 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef vuMedian_h
+#define vuMedian_h
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+namespace itk {
+namespace RollTracing {
+/** The median of the values (the upper one of an even count; 0 when there are none). */
+inline double
+Median(std::vector<double> values)
+{
+  if (values.empty())
+  {
+    return 0.0;
+  }
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+/** The median of the values within `half` entries of each (fewer at the ends): a curve's
+ * course without its short bumps. */
+inline std::vector<double>
+RunningMedian(const std::vector<double> & values, long half)
+{
+  const auto          n = static_cast<long>(values.size());
+  std::vector<double> median(values.size(), 0.0);
+  for (long i = 0; i < n; ++i)
+  {
+    const long first = std::max(0L, i - half), last = std::min(n - 1, i + half);
+    median[static_cast<size_t>(i)] = Median(std::vector<double>(values.begin() + first, values.begin() + last + 1));
+  }
+  return median;
+}
+} // namespace RollTracing
+} // end namespace itk
+
+#endif
