@@ -38,16 +38,27 @@ Median(std::vector<double> values)
 }
 
 /** The median of the values within `half` entries of each (fewer at the ends): a curve's
- * course without its short bumps. */
+ * course without its short bumps. The window is kept sorted as it slides (one insertion and
+ * one removal a step), the same figure as Median of each window. */
 inline std::vector<double>
 RunningMedian(const std::vector<double> & values, long half)
 {
   const auto          n = static_cast<long>(values.size());
   std::vector<double> median(values.size(), 0.0);
+  std::vector<double> window;
+  long                first = 0, last = -1; // the window holds values[first..last]
   for (long i = 0; i < n; ++i)
   {
-    const long first = std::max(0L, i - half), last = std::min(n - 1, i + half);
-    median[static_cast<size_t>(i)] = Median(std::vector<double>(values.begin() + first, values.begin() + last + 1));
+    for (; last < std::min(n - 1, i + half); ++last)
+    {
+      const double v = values[static_cast<size_t>(last + 1)];
+      window.insert(std::upper_bound(window.begin(), window.end(), v), v);
+    }
+    for (; first < std::max(0L, i - half); ++first)
+    {
+      window.erase(std::lower_bound(window.begin(), window.end(), values[static_cast<size_t>(first)]));
+    }
+    median[static_cast<size_t>(i)] = window[window.size() / 2];
   }
   return median;
 }

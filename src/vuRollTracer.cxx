@@ -306,8 +306,7 @@ public:
   {
     // Only a spiral: a trace that grows by a turn spacing every turn, or by two where it
     // crossed onto the next turn.
-    const double growth = MedianGrowth(reference);
-    if (reference.Empty() || growth < 0.6 * m_Pitch || growth > 2.5 * m_Pitch)
+    if (reference.Empty() || !GrowsByPitch(MedianGrowth(reference), 2.5))
     {
       return Trace{};
     }
@@ -805,11 +804,11 @@ public:
     }
     return growth.empty() ? 0.0 : std::abs(Median(growth));
   }
+  // A spiral's growth per turn: about a turn spacing (at most `most` of them).
   bool
-  GrowsByPitch(const Trace & trace) const
+  GrowsByPitch(double growth, double most = 1.6) const
   {
-    const double growth = MedianGrowth(trace);
-    return growth >= 0.6 * m_Pitch && growth <= 1.6 * m_Pitch;
+    return growth >= 0.6 * m_Pitch && growth <= most * m_Pitch;
   }
 
   // Median spacing of successive crossings and median crossing width.
@@ -1366,7 +1365,7 @@ TraceRoll(const SheetVolumeView &             volume,
   // trace of two turns or more that grows by the turn spacing every turn is a spiral with
   // fewer of them explained.
   const double medianGrowth = tracer.MedianGrowth(seedTrace);
-  const bool   growsByPitch = tracer.GrowsByPitch(seedTrace);
+  const bool   growsByPitch = tracer.GrowsByPitch(medianGrowth);
   result.Rolled = turns >= 1.0 && medianGrowth >= std::max(settings.Voxel, 0.5 * tracer.Width()) &&
                   (result.Explained >= 0.6 || (turns >= 2.0 && growsByPitch && result.Explained >= 0.4));
   progress(0.1);

@@ -149,8 +149,8 @@ TraceTurn(const PolarSlice &          slice,
   for (long i = 0; i < n; ++i)
   {
     const double b = bound[static_cast<size_t>(i)];
-    // side 0: the path keeps within a window about `bound` itself.
-    // Without the turn beyond the bound, at most NearApart spacings from it.
+    // side 0: the path keeps within a window about `bound` itself. Without the turn beyond
+    // the bound, at most NearApart spacings from it.
     const double far = beyond.empty() ? near : most;
     double       low = side > 0 ? b + least : side < 0 ? b - far : b - window;
     double       high = side > 0 ? b + far : side < 0 ? b - least : b + window;
