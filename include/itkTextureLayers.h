@@ -54,11 +54,21 @@ public:
     Median,
     SingleLayer
   };
+  /** Whether a one-sided texture has the sheet's core (the layers within half a voxel of
+   * the mid-surface) subtracted: always, never, or whichever shows the higher ink contrast. */
+  enum class CoreSubtraction : uint8_t
+  {
+    Auto,
+    Yes,
+    No
+  };
 };
 VirtualUnwrapping_EXPORT std::ostream &
                          operator<<(std::ostream & out, const TextureLayersEnums::Side value);
 VirtualUnwrapping_EXPORT std::ostream &
                          operator<<(std::ostream & out, const TextureLayersEnums::Filter value);
+VirtualUnwrapping_EXPORT std::ostream &
+                         operator<<(std::ostream & out, const TextureLayersEnums::CoreSubtraction value);
 
 /** \class TextureLayers
  * \brief How to sample along a surface normal and combine the samples: the layer offsets

@@ -59,6 +59,21 @@ operator<<(std::ostream & out, const TextureLayersEnums::Filter value)
   return out << "INVALID Filter " << static_cast<int>(value);
 }
 
+std::ostream &
+operator<<(std::ostream & out, const TextureLayersEnums::CoreSubtraction value)
+{
+  switch (value)
+  {
+    case TextureLayersEnums::CoreSubtraction::Auto:
+      return out << "Auto";
+    case TextureLayersEnums::CoreSubtraction::Yes:
+      return out << "Yes";
+    case TextureLayersEnums::CoreSubtraction::No:
+      return out << "No";
+  }
+  return out << "INVALID CoreSubtraction " << static_cast<int>(value);
+}
+
 TextureLayers::TextureLayers(unsigned int numberOfLayers,
                              double       layerSpacing,
                              double       focus,

@@ -25,13 +25,13 @@
 #include "vuSimulationOptions.h"
 
 #include "itkCTVolumeReader.h"
-#include "itkFlattenedTextureImageFilter.h"
 #include "itkFlipImageFilter.h"
 #include "itkImageFileReader.h"
 #include "itkImageFileWriter.h"
 #include "itkLayerStackTexture.h"
 #include "itkLayeredTextureMeshFilter.h"
 #include "itkMassSpringSheetFlattener.h"
+#include "itkReadableTextureImageFilter.h"
 #include "itkRescaleIntensityImageFilter.h"
 #include "itkSheetMeshAdaptor.h"
 #include "itkSheetMidSurfaceMeshFilter.h"
@@ -126,6 +126,71 @@ SideName(itk::TextureLayersEnums::Side side)
 {
   using S = itk::TextureLayersEnums::Side;
   return side == S::Positive ? "positive" : (side == S::Negative ? "negative" : "both");
+}
+
+itk::TextureLayersEnums::CoreSubtraction
+CoreFromName(const std::string & name)
+{
+  using C = itk::TextureLayersEnums::CoreSubtraction;
+  return name == "yes" ? C::Yes : (name == "no" ? C::No : C::Auto);
+}
+
+// The texture's parameters as applied (report.json).
+nlohmann::json
+TextureParametersJson(const itk::ReadableTextureImageFilter<VolumeType, TextureType, MeshType> & texturer,
+                      const UnwrapOptions &                                                      options,
+                      double                                                                     displayBorder)
+{
+  const itk::ReadableTextureSelection & selection = texturer.GetSelection();
+  const itk::ReadableTextureCandidate & chosen = selection.ChosenCandidate();
+  nlohmann::json                        candidates = nlohmann::json::array();
+  for (const auto & c : selection.Candidates)
+  {
+    if (c.Count > 0)
+    {
+      candidates.push_back({ { "layers", { c.First, c.First + c.Count - 1 } }, { "stroke_contrast", c.Score } });
+    }
+    else
+    {
+      candidates.push_back(
+        { { "side", SideName(c.Side) }, { "subtract_core", c.SubtractCore }, { "ink_contrast", c.Score } });
+    }
+  }
+  const bool restore = texturer.GetRestoreFWHM() >= 0.0;
+  return { { "layers", texturer.GetAppliedNumberOfLayers() },
+           { "layers_combined", selection.VertexLayers },
+           { "layer_spacing_mm", texturer.GetAppliedLayerSpacing() },
+           { "side", SideName(chosen.Side) },
+           { "side_requested", options.Side },
+           { "filter", chosen.Count > 0 ? std::string("mean") : options.Filter },
+           { "filter_requested", options.Filter },
+           { "focal_slab",
+             chosen.Count > 0 ? nlohmann::json{ { "layers", { chosen.First, chosen.First + chosen.Count - 1 } },
+                                                { "depth_mm", selection.Depth } }
+                              : nlohmann::json(false) },
+           { "subtract_core", chosen.SubtractCore },
+           { "subtract_core_requested", options.SubtractCore },
+           { "core_width_mm", selection.CoreWidth },
+           { "median_radius_mm", selection.MedianRadius },
+           { "smooth_sigma_mm", selection.SmoothSigma },
+           { "restore",
+             restore ? nlohmann::json{ { "psf_fwhm_mm", texturer.GetRestoreFWHM() },
+                                       { "psf_sigma_mm", selection.PsfSigma },
+                                       { "bilateral_domain_sigma_mm", selection.RestoreDomainSigma },
+                                       { "bilateral_range_factor", selection.RestoreRangeFactor },
+                                       { "tikhonov_regularization", selection.RestoreRegularization } }
+                     : nlohmann::json(false) },
+           { "display_border_mm", displayBorder },
+           { "focus_mm", options.Focus },
+           { "pixel_size_mm", texturer.GetAppliedPixelSize() },
+           { "selection",
+             { { "criterion",
+                 selection.FocalSlabs ? "noisy scan: focal slabs (mean of 3 or 5 layers) at every depth; highest "
+                                        "stroke contrast, the ink contrast of the denoised slab band-passed "
+                                        "between Gaussians of 0.5 and 3 voxels"
+                                      : "highest ink contrast, (99th percentile - median) / (1.4826 median "
+                                        "absolute deviation) of the denoised texture" },
+               { "candidates", candidates } } } };
 }
 
 // "auto" (giving `automatic`) or a non-negative length in mm.
@@ -501,178 +566,47 @@ RunUnwrap(UnwrapOptions & options)
   const itk::SheetMesh flat = flattener.Flatten(surface);
   endStage("flatten");
 
-  // 5. Texture.
+  // 5. Texture: the one in which the writing reads best (ReadableTextureImageFilter).
   progress.Start("texture", "sampling the layered texture");
-  const double voxel = std::min({ spacing[0], spacing[1], spacing[2] });
-  const double pixelSize = options.PixelSize > 0.0 ? options.PixelSize : voxel / 2.0;
-  const double layerSpacing = options.LayerSpacing > 0.0 ? options.LayerSpacing : voxel / 2.0;
-  const bool   automaticSide = options.Side == "auto";
-  using SideEnum = itk::TextureLayersEnums::Side;
-  // With --side auto the layers are sampled on both sides and each half is a candidate.
-  const SideEnum stackSide = automaticSide ? SideEnum::Both : SideFromName(options.Side);
-  // Automatic layers reach from the surface to half a voxel beyond the sheet's measured
-  // face, on both sides or on the one side asked for, so ink on either face or inside is
-  // seen, and no more.
-  const auto reach =
-    static_cast<unsigned int>(std::ceil((0.5 * meshReport.SheetThickness + 0.5 * voxel) / layerSpacing));
-  const unsigned int layerCount =
-    options.Layers > 0 ? options.Layers : (stackSide == SideEnum::Both ? 1 + 2 * reach : 1 + reach);
-  if (automaticSide && layerCount % 2 == 0)
-  {
-    throw UsageError("--side auto splits the layers at the focus: give an odd number of --layers");
-  }
-  // Restoration (--restore FWHM) replaces the Gaussian after the median: edge-preserving
-  // smoothing over one voxel, range twice the texture's background spread, then the
-  // scanner's blur undone: its PSF and the voxels' partial volume.
-  const double     psfFWHM = RestoreFWHM(options.Restore);
-  const bool       restore = psfFWHM >= 0.0;
-  const double     psfSigma = restore ? itk::LayerStackTexture::ScanBlurSigma(psfFWHM, voxel) : 0.0;
-  const double     restoreDomainSigma = restore ? voxel : 0.0;
-  constexpr double RestoreRangeFactor = 2.0;
-  constexpr double RestoreRegularization = 0.1;
-  // A noisy scan (the segmentation smoothed it) gets a texture denoised as strongly.
-  const double denoiseWidth = std::max(0.5, segmentation->GetAppliedDenoisingSigma()) * voxel;
-  const double medianRadius = AutoOrLength(options.Median, "--median", denoiseWidth);
-  const double smoothSigma = restore ? 0.0 : AutoOrLength(options.Smooth, "--smooth", denoiseWidth);
-  const double displayBorder = AutoOrLength(options.DisplayBorder, "--display-border", meshReport.SheetThickness);
-  // The sheet's core: the layers within half a voxel of the surface on the chosen side.
-  const double coreWidth = 0.5 * voxel;
-  auto         surfaceMesh = itk::SheetMeshToMesh<MeshType>(surface);
-  auto         flatMesh = itk::SheetMeshToMesh<MeshType>(flat);
-  auto         texturer = itk::FlattenedTextureImageFilter<VolumeType, TextureType, MeshType>::New();
+  const bool automaticSide = options.Side == "auto";
+  auto       texturer = itk::ReadableTextureImageFilter<VolumeType, TextureType, MeshType>::New();
+  auto       surfaceMesh = itk::SheetMeshToMesh<MeshType>(surface);
   texturer->SetSurfaceMesh(surfaceMesh);
-  texturer->SetFlatMesh(flatMesh);
+  texturer->SetFlatMesh(itk::SheetMeshToMesh<MeshType>(flat));
   texturer->SetVolume(volume);
-  texturer->SetPixelSize(pixelSize);
-  texturer->SetMargin(2.0 * pixelSize);
-  texturer->SetNumberOfLayers(layerCount);
-  texturer->SetLayerSpacing(layerSpacing);
+  texturer->SetPixelSize(options.PixelSize);
+  texturer->SetNumberOfLayers(options.Layers);
+  texturer->SetLayerSpacing(options.LayerSpacing);
+  texturer->SetSheetThickness(meshReport.SheetThickness);
   texturer->SetFocus(options.Focus);
-  texturer->SetLayerSide(stackSide);
+  texturer->SetAutomaticSide(automaticSide);
+  if (!automaticSide)
+  {
+    texturer->SetLayerSide(SideFromName(options.Side));
+  }
+  texturer->SetSubtractCore(CoreFromName(options.SubtractCore));
   texturer->SetLayerFilter(FilterFromName(options.Filter));
+  texturer->SetDenoisingSigma(segmentation->GetAppliedDenoisingSigma());
+  texturer->SetMedianRadius(AutoOrLength(options.Median, "--median", -1.0));
+  texturer->SetSmoothSigma(AutoOrLength(options.Smooth, "--smooth", -1.0));
+  texturer->SetRestoreFWHM(RestoreFWHM(options.Restore));
   progress.Observe(texturer);
   texturer->Update();
-
-  // Each candidate's denoising: the median, then the Gaussian or the restoration (no
-  // edge-preserving step on a texture without spread, which it would leave as it is).
-  const auto denoise = [&](const TextureType * combined) {
-    const auto despeckled = itk::LayerStackTexture::Median(combined, medianRadius);
-    if (!restore)
-    {
-      return itk::LayerStackTexture::Smooth(despeckled, smoothSigma);
-    }
-    const double range = RestoreRangeFactor * itk::LayerStackTexture::NoiseSpread(despeckled);
-    const auto   smoothed =
-      range > 0.0 ? itk::LayerStackTexture::EdgePreservingSmooth(despeckled, restoreDomainSigma, range) : despeckled;
-    return itk::LayerStackTexture::Deconvolve(smoothed, psfSigma, RestoreRegularization);
-  };
-
-  // Candidate textures from the layer stack: the sides (both halves too with --side auto)
-  // with and without the sheet's core subtracted (one side only with --subtract-core
-  // auto), each denoised (median, then Gaussian) or restored; the one of highest ink
-  // contrast is kept. On a noisy scan (the segmentation smoothed it) with --side auto the
-  // candidates are focal slabs instead: the mean of 3 or 5 neighbouring layers at every
-  // depth, scored by the contrast of letter-sized strokes (LayerStackTexture explains why
-  // neither the maximum over layers nor the plain ink contrast holds under noise).
-  struct Candidate
-  {
-    SideEnum             Side;
-    bool                 SubtractCore;
-    double               InkContrast;
-    TextureType::Pointer Texture;
-    unsigned int         First{ 0 }; // focal slab: its first layer and its number of layers
-    unsigned int         Count{ 0 };
-  };
-  std::vector<Candidate> candidates;
-  const bool             focalSlabs = automaticSide && segmentation->GetAppliedDenoisingSigma() > 0.0;
-  const double           strokeSigma = 0.5 * voxel;
-  if (focalSlabs)
-  {
-    for (const unsigned int count : { 3u, 5u })
-    {
-      for (unsigned int first = 0; first + count <= layerCount; ++first)
-      {
-        const auto smoothed =
-          denoise(itk::LayerStackTexture::LayerWindow(texturer->GetLayerStackOutput(), first, count));
-        candidates.push_back({ SideEnum::Both,
-                               false,
-                               itk::LayerStackTexture::StrokeContrast(smoothed, strokeSigma),
-                               smoothed,
-                               first,
-                               count });
-      }
-    }
-  }
-  const std::vector<SideEnum> sides =
-    focalSlabs      ? std::vector<SideEnum>{}
-    : automaticSide ? std::vector<SideEnum>{ SideEnum::Both, SideEnum::Positive, SideEnum::Negative }
-                    : std::vector<SideEnum>{ stackSide };
-  for (const SideEnum side : sides)
-  {
-    std::vector<bool> cores;
-    if (options.SubtractCore == "yes")
-    {
-      cores = { true };
-    }
-    else if (options.SubtractCore == "no" || side == SideEnum::Both)
-    {
-      cores = { false };
-    }
-    else
-    {
-      cores = { false, true };
-    }
-    for (const bool core : cores)
-    {
-      auto       combined = itk::LayerStackTexture::Combine(texturer->GetLayerStackOutput(),
-                                                      layerCount,
-                                                      layerSpacing,
-                                                      options.Focus,
-                                                      stackSide,
-                                                      side,
-                                                      FilterFromName(options.Filter),
-                                                      texturer->GetGaussianSigma(),
-                                                      core ? coreWidth : 0.0);
-      const auto smoothed = denoise(combined);
-      candidates.push_back({ side, core, itk::LayerStackTexture::InkContrast(smoothed), smoothed });
-    }
-  }
-  const Candidate & chosen =
-    *std::max_element(candidates.begin(), candidates.end(), [](const Candidate & a, const Candidate & b) {
-      return a.InkContrast < b.InkContrast;
-    });
-  nlohmann::json candidateReport = nlohmann::json::array();
-  for (const Candidate & c : candidates)
-  {
-    if (c.Count > 0)
-    {
-      candidateReport.push_back(
-        { { "layers", { c.First, c.First + c.Count - 1 } }, { "stroke_contrast", c.InkContrast } });
-    }
-    else
-    {
-      candidateReport.push_back(
-        { { "side", SideName(c.Side) }, { "subtract_core", c.SubtractCore }, { "ink_contrast", c.InkContrast } });
-    }
-  }
-  // A focal slab's depth: its middle layer's offset from the stack's middle (the focus).
-  const double slabFocus =
-    options.Focus +
-    (static_cast<double>(chosen.First) + 0.5 * (static_cast<double>(chosen.Count) - 1.0) - 0.5 * (layerCount - 1.0)) *
-      layerSpacing;
+  const itk::ReadableTextureSelection & selection = texturer->GetSelection();
+  const double                          layerSpacing = texturer->GetAppliedLayerSpacing();
+  const double                          pixelSize = texturer->GetAppliedPixelSize();
+  const double displayBorder = AutoOrLength(options.DisplayBorder, "--display-border", meshReport.SheetThickness);
 
   // The per-vertex texture (surface.vtp) samples the chosen side with the same filter,
   // without core subtraction or denoising.
-  const unsigned int vertexLayers =
-    chosen.Count > 0 ? chosen.Count : (chosen.Side == stackSide ? layerCount : (layerCount + 1) / 2);
   auto perVertex = itk::LayeredTextureMeshFilter<MeshType, VolumeType, MeshType>::New();
   perVertex->SetInput(surfaceMesh);
   perVertex->SetVolume(volume);
-  perVertex->SetNumberOfLayers(vertexLayers);
+  perVertex->SetNumberOfLayers(selection.VertexLayers);
   perVertex->SetLayerSpacing(layerSpacing);
-  perVertex->SetFocus(chosen.Count > 0 ? slabFocus : options.Focus);
-  perVertex->SetLayerSide(chosen.Side);
-  perVertex->SetLayerFilter(chosen.Count > 0 ? itk::TextureLayersEnums::Filter::Mean : FilterFromName(options.Filter));
+  perVertex->SetFocus(selection.Depth);
+  perVertex->SetLayerSide(selection.VertexSide);
+  perVertex->SetLayerFilter(selection.VertexFilter);
   perVertex->Update();
   std::vector<float> vertexTexture(surface.GetNumberOfPoints(), 0.0f);
   for (auto it = perVertex->GetOutput()->GetPointData()->Begin(); it != perVertex->GetOutput()->GetPointData()->End();
@@ -683,7 +617,7 @@ RunUnwrap(UnwrapOptions & options)
       vertexTexture[it.Index()] = it.Value();
     }
   }
-  TextureType::Pointer     texture = FlipRows(chosen.Texture.GetPointer());
+  TextureType::Pointer     texture = FlipRows(texturer->GetOutput());
   TextureMaskType::Pointer textureMask = FlipRows(texturer->GetMaskOutput());
   LayerStackType::Pointer  layers = FlipRows(texturer->GetLayerStackOutput());
   // The image to look at and to read: the texture less a border of the sheet, where the
@@ -751,49 +685,14 @@ RunUnwrap(UnwrapOptions & options)
   endStage("write");
 
   // 7. Measures: distortion, and against the ground truth when there is one.
-  report["parameters"] = {
-    { "threshold", { { "value", segmentation->GetThreshold() }, { "automatic", automaticThreshold } } },
-    { "mesh",
-      { { "method", itk::ToString(meshReport.Method) },
-        { "spacing_along_sheet_mm", meshReport.SpacingAlongSheet },
-        { "spacing_along_axis_mm", meshReport.SpacingAlongAxis } } },
-    { "texture",
-      { { "layers", layerCount },
-        { "layers_combined", vertexLayers },
-        { "layer_spacing_mm", layerSpacing },
-        { "side", SideName(chosen.Side) },
-        { "side_requested", options.Side },
-        { "filter", chosen.Count > 0 ? std::string("mean") : options.Filter },
-        { "filter_requested", options.Filter },
-        { "focal_slab",
-          chosen.Count > 0 ? nlohmann::json{ { "layers", { chosen.First, chosen.First + chosen.Count - 1 } },
-                                             { "depth_mm", slabFocus } }
-                           : nlohmann::json(false) },
-        { "subtract_core", chosen.SubtractCore },
-        { "subtract_core_requested", options.SubtractCore },
-        { "core_width_mm", coreWidth },
-        { "median_radius_mm", medianRadius },
-        { "smooth_sigma_mm", smoothSigma },
-        { "restore",
-          restore ? nlohmann::json{ { "psf_fwhm_mm", psfFWHM },
-                                    { "psf_sigma_mm", psfSigma },
-                                    { "bilateral_domain_sigma_mm", restoreDomainSigma },
-                                    { "bilateral_range_factor", RestoreRangeFactor },
-                                    { "tikhonov_regularization", RestoreRegularization } }
-                  : nlohmann::json(false) },
-        { "display_border_mm", displayBorder },
-        { "focus_mm", options.Focus },
-        { "pixel_size_mm", pixelSize },
-        { "selection",
-          { { "criterion",
-              focalSlabs ? "noisy scan: focal slabs (mean of 3 or 5 layers) at every depth; highest "
-                           "stroke contrast, the ink contrast of the denoised slab band-passed "
-                           "between Gaussians of 0.5 and 3 voxels"
-                         : "highest ink contrast, (99th percentile - median) / (1.4826 median "
-                           "absolute deviation) of the denoised texture" },
-            { "candidates", candidateReport } } } } },
-    { "simulation", ToJson(flattener.GetParameters()) }
-  };
+  report["parameters"] = { { "threshold",
+                             { { "value", segmentation->GetThreshold() }, { "automatic", automaticThreshold } } },
+                           { "mesh",
+                             { { "method", itk::ToString(meshReport.Method) },
+                               { "spacing_along_sheet_mm", meshReport.SpacingAlongSheet },
+                               { "spacing_along_axis_mm", meshReport.SpacingAlongAxis } } },
+                           { "texture", TextureParametersJson(*texturer, options, displayBorder) },
+                           { "simulation", ToJson(flattener.GetParameters()) } };
   report["mesh"] = { { "points", surface.GetNumberOfPoints() },
                      { "triangles", surface.GetNumberOfTriangles() },
                      { "grid", { surface.GridRows, surface.GridColumns } },
@@ -805,8 +704,8 @@ RunUnwrap(UnwrapOptions & options)
   report["distortion"] = DistortionJson(surface, flat);
   report["texture"] = {
     { "size", { texture->GetLargestPossibleRegion().GetSize()[0], texture->GetLargestPossibleRegion().GetSize()[1] } },
-    { "sheet_pixels", texturer->GetNumberOfSheetPixels() },
-    { "clamped_samples", texturer->GetNumberOfClampedSamples() }
+    { "sheet_pixels", texturer->GetTextureFilter()->GetNumberOfSheetPixels() },
+    { "clamped_samples", texturer->GetTextureFilter()->GetNumberOfClampedSamples() }
   };
   if (truthInk)
   {

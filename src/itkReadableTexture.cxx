@@ -1,0 +1,179 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkReadableTexture.h"
+#include "itkLayerStackTexture.h"
+#include "itkMacro.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace itk {
+namespace {
+using SideEnum = TextureLayersEnums::Side;
+using TextureType = LayerStackTexture::TextureType;
+// Restoration: bilateral range as a multiple of the background's spread, Tikhonov
+// regularization relative to the PSF's unit gain.
+constexpr double RestoreRangeFactor = 2.0;
+constexpr double RestoreRegularization = 0.1;
+
+[[noreturn]] void
+Fail(const std::string & message)
+{
+  itkGenericExceptionMacro(<< message);
+}
+} // namespace
+
+unsigned int
+ReadableTextureLayers(double sheetThickness, double voxel, double layerSpacing, TextureLayersEnums::Side side)
+{
+  if (!(voxel > 0.0) || !(layerSpacing > 0.0) || !(sheetThickness >= 0.0))
+  {
+    Fail("ReadableTextureLayers: the voxel size and layer spacing must be positive and the thickness not negative");
+  }
+  const auto reach = static_cast<unsigned int>(std::ceil((0.5 * sheetThickness + 0.5 * voxel) / layerSpacing));
+  return side == SideEnum::Both ? 1 + 2 * reach : 1 + reach;
+}
+
+ReadableTextureSelection
+SelectReadableTexture(const Image<float, 3> * stack, const ReadableTextureSettings & settings)
+{
+  if (stack == nullptr)
+  {
+    Fail("SelectReadableTexture: no layer stack");
+  }
+  const unsigned int layers = settings.NumberOfLayers;
+  if (layers == 0 || stack->GetLargestPossibleRegion().GetSize()[2] != layers)
+  {
+    std::ostringstream text;
+    text << "SelectReadableTexture: the layer stack holds " << stack->GetLargestPossibleRegion().GetSize()[2]
+         << " layers, not " << layers;
+    Fail(text.str());
+  }
+  if (settings.AutomaticSide && (settings.StackSide != SideEnum::Both || layers % 2 == 0))
+  {
+    Fail("SelectReadableTexture: the automatic side splits the layers at the focus: the stack must lie on both sides "
+         "with an odd number of layers");
+  }
+  if (!(settings.Voxel > 0.0) || !(settings.LayerSpacing > 0.0))
+  {
+    Fail("SelectReadableTexture: the voxel size and layer spacing must be positive");
+  }
+  ReadableTextureSelection selection;
+  const bool               restore = settings.RestoreFWHM >= 0.0;
+  if (restore && settings.SmoothSigma > 0.0)
+  {
+    Fail("SelectReadableTexture: restoration replaces the Gaussian smoothing: leave the smoothing automatic or 0");
+  }
+  // A noisy scan (the segmentation smoothed it) gets a texture denoised as strongly.
+  const double denoiseWidth = std::max(0.5, settings.DenoisingSigma) * settings.Voxel;
+  selection.MedianRadius = settings.MedianRadius >= 0.0 ? settings.MedianRadius : denoiseWidth;
+  selection.SmoothSigma = restore ? 0.0 : settings.SmoothSigma >= 0.0 ? settings.SmoothSigma : denoiseWidth;
+  selection.CoreWidth = 0.5 * settings.Voxel;
+  if (restore)
+  {
+    selection.PsfSigma = LayerStackTexture::ScanBlurSigma(settings.RestoreFWHM, settings.Voxel);
+    selection.RestoreDomainSigma = settings.Voxel;
+    selection.RestoreRangeFactor = RestoreRangeFactor;
+    selection.RestoreRegularization = RestoreRegularization;
+  }
+  // Each candidate's denoising: the median, then the Gaussian or the restoration (no
+  // edge-preserving step on a texture without spread, which it would leave as it is).
+  const auto denoise = [&](const TextureType * combined) {
+    const auto despeckled = LayerStackTexture::Median(combined, selection.MedianRadius);
+    if (!restore)
+    {
+      return LayerStackTexture::Smooth(despeckled, selection.SmoothSigma);
+    }
+    const double range = RestoreRangeFactor * LayerStackTexture::NoiseSpread(despeckled);
+    const auto   smoothed = range > 0.0
+                              ? LayerStackTexture::EdgePreservingSmooth(despeckled, selection.RestoreDomainSigma, range)
+                              : despeckled;
+    return LayerStackTexture::Deconvolve(smoothed, selection.PsfSigma, RestoreRegularization);
+  };
+
+  std::vector<TextureType::Pointer> textures;
+  selection.FocalSlabs = settings.AutomaticSide && settings.DenoisingSigma > 0.0;
+  if (selection.FocalSlabs)
+  {
+    const double strokeSigma = 0.5 * settings.Voxel;
+    for (const unsigned int count : { 3u, 5u })
+    {
+      for (unsigned int first = 0; first + count <= layers; ++first)
+      {
+        textures.push_back(denoise(LayerStackTexture::LayerWindow(stack, first, count)));
+        selection.Candidates.push_back(
+          { SideEnum::Both, false, LayerStackTexture::StrokeContrast(textures.back(), strokeSigma), first, count });
+      }
+    }
+  }
+  const std::vector<SideEnum> sides =
+    selection.FocalSlabs     ? std::vector<SideEnum>{}
+    : settings.AutomaticSide ? std::vector<SideEnum>{ SideEnum::Both, SideEnum::Positive, SideEnum::Negative }
+                             : std::vector<SideEnum>{ settings.StackSide };
+  using Core = TextureLayersEnums::CoreSubtraction;
+  for (const SideEnum side : sides)
+  {
+    const std::vector<bool> cores = settings.SubtractCore == Core::Yes ? std::vector<bool>{ true }
+                                    : settings.SubtractCore == Core::No || side == SideEnum::Both
+                                      ? std::vector<bool>{ false }
+                                      : std::vector<bool>{ false, true };
+    for (const bool core : cores)
+    {
+      const auto combined = LayerStackTexture::Combine(stack,
+                                                       layers,
+                                                       settings.LayerSpacing,
+                                                       settings.Focus,
+                                                       settings.StackSide,
+                                                       side,
+                                                       settings.Filter,
+                                                       settings.GaussianSigma,
+                                                       core ? selection.CoreWidth : 0.0);
+      textures.push_back(denoise(combined));
+      selection.Candidates.push_back({ side, core, LayerStackTexture::InkContrast(textures.back()), 0, 0 });
+    }
+  }
+  if (selection.Candidates.empty())
+  {
+    Fail("SelectReadableTexture: no candidate texture (too few layers for a focal slab)");
+  }
+  // The first of the highest scores.
+  for (size_t i = 1; i < selection.Candidates.size(); ++i)
+  {
+    if (selection.Candidates[i].Score > selection.Candidates[selection.Chosen].Score)
+    {
+      selection.Chosen = i;
+    }
+  }
+  selection.Texture = textures[selection.Chosen];
+  const ReadableTextureCandidate & chosen = selection.ChosenCandidate();
+  // A focal slab's depth: its middle layer's offset from the stack's middle (the focus).
+  selection.Depth = chosen.Count > 0 ? settings.Focus + (static_cast<double>(chosen.First) +
+                                                         0.5 * (static_cast<double>(chosen.Count) - 1.0) -
+                                                         0.5 * (static_cast<double>(layers) - 1.0)) *
+                                                          settings.LayerSpacing
+                                     : settings.Focus;
+  // The per-vertex texture samples the chosen side with the same filter (a focal slab: its
+  // layers' mean), without core subtraction or denoising.
+  selection.VertexLayers =
+    chosen.Count > 0 ? chosen.Count : (chosen.Side == settings.StackSide ? layers : (layers + 1) / 2);
+  selection.VertexSide = chosen.Side;
+  selection.VertexFilter = chosen.Count > 0 ? TextureLayersEnums::Filter::Mean : settings.Filter;
+  return selection;
+}
+} // end namespace itk
