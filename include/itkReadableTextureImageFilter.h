@@ -146,6 +146,28 @@ public:
   {
     return m_Selection.Candidates.empty() ? 0.0 : m_Selection.ChosenCandidate().Score;
   }
+  /** The chosen candidate's side and core subtraction, and a focal slab's first layer and
+   * number of layers (0 for a side candidate). */
+  SideEnum
+  GetChosenSide() const
+  {
+    return m_Selection.Candidates.empty() ? SideEnum::Both : m_Selection.ChosenCandidate().Side;
+  }
+  bool
+  GetChosenSubtractCore() const
+  {
+    return !m_Selection.Candidates.empty() && m_Selection.ChosenCandidate().SubtractCore;
+  }
+  unsigned int
+  GetChosenFirstLayer() const
+  {
+    return m_Selection.Candidates.empty() ? 0 : m_Selection.ChosenCandidate().First;
+  }
+  unsigned int
+  GetChosenNumberOfLayers() const
+  {
+    return m_Selection.Candidates.empty() ? 0 : m_Selection.ChosenCandidate().Count;
+  }
   /** The layered texture filter inside (its diagnostics and pixel map). */
   const TextureFilterType *
   GetTextureFilter() const

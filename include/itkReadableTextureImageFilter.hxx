@@ -28,7 +28,6 @@ template <typename TImage, typename TOutputImage, typename TMesh>
 ReadableTextureImageFilter<TImage, TOutputImage, TMesh>::ReadableTextureImageFilter()
   : m_TextureFilter(TextureFilterType::New())
 {
-  this->AddRequiredInputName("SurfaceMesh");
   this->AddRequiredInputName("FlatMesh");
   this->AddRequiredInputName("Volume");
   this->SetPrimaryInputName("SurfaceMesh");

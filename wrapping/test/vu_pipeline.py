@@ -2,8 +2,6 @@
 
 Shared by the Python tests; also an example of the module's Python API.
 """
-import math
-
 import itk
 
 VolumeType = itk.Image[itk.F, 3]
@@ -36,41 +34,18 @@ def unwrap(volume, layer_filter="Max"):
     flattening.Update()
     flat = flattening.GetOutput()
 
-    # The tool's automatic texture parameters: pixels and layers half a voxel apart, layers
-    # on both sides reaching half a voxel beyond the sheet's measured faces.
-    voxel = min(volume.GetSpacing())
-    pixel_size = voxel / 2.0
-    layer_spacing = voxel / 2.0
-    thickness = surface_filter.GetSheetThickness()
-    reach = int(math.ceil((0.5 * thickness + 0.5 * voxel) / layer_spacing))
-    layers = 1 + 2 * reach
-    Side = itk.TextureLayersEnums
-
-    texturer = itk.FlattenedTextureImageFilter[VolumeType, TextureType, MeshType].New()
+    # The texture the tool writes: automatic pixel size, layers and side, core subtraction
+    # and denoising chosen by ink contrast (ReadableTextureImageFilter holds that policy).
+    Layers = itk.TextureLayersEnums
+    texturer = itk.ReadableTextureImageFilter[VolumeType, TextureType, MeshType].New()
     texturer.SetSurfaceMesh(surface)
     texturer.SetFlatMesh(flat)
     texturer.SetVolume(volume)
-    texturer.SetPixelSize(pixel_size)
-    texturer.SetMargin(2.0 * pixel_size)
-    texturer.SetNumberOfLayers(layers)
-    texturer.SetLayerSpacing(layer_spacing)
-    texturer.SetLayerSide(enum_value(Side, "Side", "Both"))
-    texturer.SetLayerFilter(enum_value(Side, "Filter", layer_filter))
+    texturer.SetSheetThickness(surface_filter.GetSheetThickness())
+    texturer.SetLayerFilter(enum_value(Layers, "Filter", layer_filter))
+    texturer.SetDenoisingSigma(segmentation.GetAppliedDenoisingSigma())
     texturer.Update()
-
-    # The tool's --side auto --subtract-core auto: candidates from the layer stack (both
-    # sides; each half with and without the sheet's core subtracted), each denoised by a
-    # median and a Gaussian of half a voxel; the one of highest ink contrast is kept.
-    stack = texturer.GetLayerStackOutput()
-    candidates = []
-    for side in ("Both", "Positive", "Negative"):
-        for core in ((False,) if side == "Both" else (False, True)):
-            combined = itk.LayerStackTexture.Combine(
-                stack, layers, layer_spacing, 0.0, enum_value(Side, "Side", "Both"), enum_value(Side, "Side", side),
-                enum_value(Side, "Filter", layer_filter), texturer.GetGaussianSigma(), 0.5 * voxel if core else 0.0)
-            smoothed = itk.LayerStackTexture.Smooth(itk.LayerStackTexture.Median(combined, 0.5 * voxel), 0.5 * voxel)
-            candidates.append((itk.LayerStackTexture.InkContrast(smoothed), side, core, smoothed))
-    contrast, side, core, chosen = max(candidates, key=lambda c: c[0])
+    chosen = texturer.GetOutput()
 
     # The tool writes rows top-down (y of the flat sheet grows upwards).
     flip = itk.FlipImageFilter[TextureType].New(Input=chosen)
@@ -86,8 +61,8 @@ def unwrap(volume, layer_filter="Max"):
         "surface_filter": surface_filter,
         "flattening": flattening,
         "texturer": texturer,
-        "layers": layers,
-        "chosen": (side, core, contrast),
+        "layers": texturer.GetAppliedNumberOfLayers(),
+        "chosen": (texturer.GetChosenSide(), texturer.GetChosenSubtractCore(), texturer.GetChosenScore()),
     }
 
 
