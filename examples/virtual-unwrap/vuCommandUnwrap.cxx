@@ -49,6 +49,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 
 namespace vu {
 namespace {
@@ -63,6 +64,7 @@ using MeshType = itk::Mesh<float, 3>;
 using TextureType = itk::Image<float, 2>;
 using TextureMaskType = itk::Image<unsigned char, 2>;
 using LayerStackType = itk::Image<float, 3>;
+using Texture8Type = itk::Image<unsigned char, 2>;
 
 struct UnwrapOptions
 {
@@ -405,46 +407,53 @@ WritePreview(const VolumeType *                   volume,
   WriteImageFile(canvas.GetPointer(), path);
 }
 
-void
-RunUnwrap(UnwrapOptions & options)
+// Times the stages for the report and tells the progress display.
+class StageClock
 {
-  const auto               started = std::chrono::steady_clock::now();
-  Progress                 progress(options.Quiet, options.JsonLog);
-  nlohmann::json           report;
-  nlohmann::json           stages = nlohmann::json::array();
-  std::vector<std::string> warnings;
-  auto                     stageStart = std::chrono::steady_clock::now();
-  auto                     endStage = [&](const std::string & name) {
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - stageStart).count();
-    stages.push_back({ { "stage", name }, { "seconds", seconds }, { "peak_memory_mib", PeakMemoryMiB() } });
-    progress.Done(name, seconds);
-    stageStart = std::chrono::steady_clock::now();
-  };
-  const fs::path outputDirectory(options.Output);
-  if (fs::exists(outputDirectory) && !fs::is_directory(outputDirectory))
+public:
+  explicit StageClock(Progress & progress)
+    : m_Progress(progress)
+  {}
+  void
+  Start(const std::string & stage, const std::string & message)
+  {
+    m_Progress.Start(stage, message);
+    m_StageStart = std::chrono::steady_clock::now();
+  }
+  void
+  End(const std::string & stage)
+  {
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - m_StageStart).count();
+    m_Stages.push_back({ { "stage", stage }, { "seconds", seconds }, { "peak_memory_mib", PeakMemoryMiB() } });
+    m_Progress.Done(stage, seconds);
+  }
+  const nlohmann::json &
+  Stages() const
+  {
+    return m_Stages;
+  }
+  double
+  Seconds() const
+  {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - m_Started).count();
+  }
+
+private:
+  Progress &                            m_Progress;
+  nlohmann::json                        m_Stages = nlohmann::json::array();
+  std::chrono::steady_clock::time_point m_Started{ std::chrono::steady_clock::now() };
+  std::chrono::steady_clock::time_point m_StageStart{ m_Started };
+};
+
+// The options that can be checked before the long stages (their automatic values need the
+// scan and the mesh); the threshold, or NaN for automatic.
+double
+CheckUnwrapOptions(const UnwrapOptions & options)
+{
+  if (fs::exists(options.Output) && !fs::is_directory(options.Output))
   {
     throw UsageError("output " + options.Output + " exists and is not a directory");
   }
-  double     threshold = 0.0;
-  const bool automaticThreshold = options.Threshold == "auto";
-  if (!automaticThreshold)
-  {
-    size_t used = 0;
-    try
-    {
-      threshold = std::stod(options.Threshold, &used);
-    }
-    catch (const std::exception &)
-    {
-      used = 0;
-    }
-    if (used != options.Threshold.size() || !std::isfinite(threshold))
-    {
-      throw UsageError("--threshold must be a number or auto, not '" + options.Threshold + "'");
-    }
-  }
-  // Texture options are checked before the long stages; their automatic values need the
-  // scan and the mesh.
   for (const auto & [value, option] : { std::make_pair(options.Median, "--median"),
                                         std::make_pair(options.Smooth, "--smooth"),
                                         std::make_pair(options.DisplayBorder, "--display-border") })
@@ -459,31 +468,75 @@ RunUnwrap(UnwrapOptions & options)
   {
     throw UsageError("--side auto splits the layers at the focus: give an odd number of --layers");
   }
-  itk::TextureFidelityCalculator::ImageType::Pointer truthInk;
-  std::string                                        truthText;
-  if (!options.GroundTruth.empty())
+  if (options.Threshold == "auto")
   {
-    const fs::path truthDirectory(options.GroundTruth);
-    std::ifstream  in(truthDirectory / "ground_truth.json");
-    if (!in)
-    {
-      throw UsageError("no ground_truth.json in " + options.GroundTruth);
-    }
-    const nlohmann::json truth = nlohmann::json::parse(in);
-    truthText = truth.at("text").get<std::string>();
-    auto inkReader = itk::ImageFileReader<TextureType>::New();
-    inkReader->SetFileName((truthDirectory / "ground_truth_ink.png").string());
-    inkReader->Update();
-    truthInk = inkReader->GetOutput();
-    const auto               spacing = truth.at("ink").at("image_spacing_mm");
-    TextureType::SpacingType inkSpacing;
-    inkSpacing[0] = spacing.at(0).get<double>();
-    inkSpacing[1] = spacing.at(1).get<double>();
-    truthInk->SetSpacing(inkSpacing);
+    return std::numeric_limits<double>::quiet_NaN();
   }
+  size_t used = 0;
+  double threshold = 0.0;
+  try
+  {
+    threshold = std::stod(options.Threshold, &used);
+  }
+  catch (const std::exception &)
+  {
+    used = 0;
+  }
+  if (used != options.Threshold.size() || !std::isfinite(threshold))
+  {
+    throw UsageError("--threshold must be a number or auto, not '" + options.Threshold + "'");
+  }
+  return threshold;
+}
 
-  // 1. Read.
-  progress.Start("read", "reading " + options.Input);
+// A phantom's ground truth (virtual-unwrap phantom): the ink image and the text.
+struct GroundTruth
+{
+  TextureType::Pointer Ink;
+  std::string          Text;
+};
+
+GroundTruth
+ReadGroundTruth(const std::string & directory)
+{
+  GroundTruth truth;
+  if (directory.empty())
+  {
+    return truth;
+  }
+  std::ifstream in(fs::path(directory) / "ground_truth.json");
+  if (!in)
+  {
+    throw UsageError("no ground_truth.json in " + directory);
+  }
+  const nlohmann::json json = nlohmann::json::parse(in);
+  truth.Text = json.at("text").get<std::string>();
+  auto inkReader = itk::ImageFileReader<TextureType>::New();
+  inkReader->SetFileName((fs::path(directory) / "ground_truth_ink.png").string());
+  inkReader->Update();
+  truth.Ink = inkReader->GetOutput();
+  const auto               spacing = json.at("ink").at("image_spacing_mm");
+  TextureType::SpacingType inkSpacing;
+  inkSpacing[0] = spacing.at(0).get<double>();
+  inkSpacing[1] = spacing.at(1).get<double>();
+  truth.Ink->SetSpacing(inkSpacing);
+  return truth;
+}
+
+// The scan as read, and with its voxels without data filled for segmentation and meshing;
+// its description goes into `input`, the reader's warnings into `warnings`.
+struct Scan
+{
+  VolumeType::Pointer Volume;
+  FilledVolume        Filled;
+};
+
+Scan
+ReadScan(const UnwrapOptions &      options,
+         Progress &                 progress,
+         nlohmann::json &           input,
+         std::vector<std::string> & warnings)
+{
   auto reader = itk::CTVolumeReader::New();
   ConfigureReader(options.Reader, options.Input, *reader);
   progress.Observe(reader);
@@ -498,176 +551,250 @@ RunUnwrap(UnwrapOptions & options)
                     std::to_string(size[2]) + " voxels");
   }
   reader->Update();
-  VolumeType::Pointer volume = reader->GetOutput();
+  Scan scan;
+  scan.Volume = reader->GetOutput();
   for (const auto & w : reader->GetWarnings())
   {
     warnings.push_back("read: " + w);
   }
   // Segmentation and meshing need a value in every voxel; the texture samples the scan as
   // read, so a sheet that crosses voxels without data shows holes (NaN) there.
-  const FilledVolume filled = FillVoxelsWithoutData(volume);
-  if (filled.Filled > 0)
+  scan.Filled = FillVoxelsWithoutData(scan.Volume);
+  if (scan.Filled.Filled > 0)
   {
     std::ostringstream text;
-    text << filled.Filled << " voxels without data (NaN) taken as " << filled.Value
+    text << scan.Filled.Filled << " voxels without data (NaN) taken as " << scan.Filled.Value
          << " (the median of the scan) for segmentation, meshing and the preview; the texture samples them as NaN";
     warnings.push_back("read: " + text.str());
   }
-  const auto size = volume->GetLargestPossibleRegion().GetSize();
-  const auto spacing = volume->GetSpacing();
-  report["input"] = { { "path", options.Input },
-                      { "kind", reader->GetInputKind() },
-                      { "modality", reader->GetModality() },
-                      { "pixel_type", reader->GetPixelType() },
-                      { "size", { size[0], size[1], size[2] } },
-                      { "spacing_mm", { spacing[0], spacing[1], spacing[2] } },
-                      { "origin_mm", { volume->GetOrigin()[0], volume->GetOrigin()[1], volume->GetOrigin()[2] } },
-                      { "rescale",
-                        { { "slope", reader->GetRescaleSlope() }, { "intercept", reader->GetRescaleIntercept() } } },
-                      { "geometry_corrections", GeometryCorrectionsJson(*reader) } };
-  endStage("read");
+  const auto size = scan.Volume->GetLargestPossibleRegion().GetSize();
+  const auto spacing = scan.Volume->GetSpacing();
+  const auto origin = scan.Volume->GetOrigin();
+  input = { { "path", options.Input },
+            { "kind", reader->GetInputKind() },
+            { "modality", reader->GetModality() },
+            { "pixel_type", reader->GetPixelType() },
+            { "size", { size[0], size[1], size[2] } },
+            { "spacing_mm", { spacing[0], spacing[1], spacing[2] } },
+            { "origin_mm", { origin[0], origin[1], origin[2] } },
+            { "rescale", { { "slope", reader->GetRescaleSlope() }, { "intercept", reader->GetRescaleIntercept() } } },
+            { "geometry_corrections", GeometryCorrectionsJson(*reader) } };
+  return scan;
+}
 
-  // 2. Segment.
-  progress.Start("segment", "segmenting the sheet");
-  auto segmentation = itk::SheetSegmentationImageFilter<VolumeType, MaskType>::New();
-  segmentation->SetInput(filled.Volume);
-  segmentation->SetAutomaticThreshold(automaticThreshold);
-  segmentation->SetThreshold(threshold);
-  progress.Observe(segmentation);
-  segmentation->Update();
-  endStage("segment");
+using TexturerType = itk::ReadableTextureImageFilter<VolumeType, TextureType, MeshType>;
 
-  // 3. Mesh the mid-surface.
-  progress.Start("mesh", "meshing the sheet's mid-surface");
-  auto surfaceFilter = itk::SheetMidSurfaceMeshFilter<MaskType, MeshType>::New();
-  surfaceFilter->SetInput(segmentation->GetOutput());
-  surfaceFilter->SetIntensityImage(filled.Volume);
-  surfaceFilter->SetMethod(itk::SheetSurfaceMethodFromString(options.Method));
-  surfaceFilter->SetSpacingAlongSheet(options.MeshSpacing);
-  surfaceFilter->SetSpacingAlongAxis(options.MeshSpacing);
-  progress.Observe(surfaceFilter);
-  surfaceFilter->Update();
-  const itk::SheetMesh surface = surfaceFilter->GetSheetMesh();
-  const auto &         meshReport = surfaceFilter->GetReport();
-  for (const auto & w : meshReport.Warnings)
-  {
-    warnings.push_back("mesh: " + w);
-  }
-  endStage("mesh");
-
-  // 4. Unroll and flatten.
-  progress.Start("flatten", "unrolling and flattening by mass-spring simulation");
-  itk::MassSpringSheetFlattener flattener;
-  flattener.SetParameters(ResolveSimulationParameters(options.Simulation, surface));
-  flattener.SetStepCallback([&progress](itk::MassSpringSystem &, const std::string & phase, uint64_t step) {
-    progress.Tick(phase, step);
-    return true;
-  });
-  const itk::SheetMesh flat = flattener.Flatten(surface);
-  endStage("flatten");
-
-  // 5. Texture: the one in which the writing reads best (ReadableTextureImageFilter).
-  progress.Start("texture", "sampling the layered texture");
-  const bool automaticSide = options.Side == "auto";
-  auto       texturer = itk::ReadableTextureImageFilter<VolumeType, TextureType, MeshType>::New();
-  auto       surfaceMesh = itk::SheetMeshToMesh<MeshType>(surface);
-  texturer->SetSurfaceMesh(surfaceMesh);
-  texturer->SetFlatMesh(itk::SheetMeshToMesh<MeshType>(flat));
-  texturer->SetVolume(volume);
+// The readable-texture filter set up with the tool's options.
+TexturerType::Pointer
+MakeTexturer(const UnwrapOptions & options, double sheetThickness, double denoisingSigma)
+{
+  auto texturer = TexturerType::New();
   texturer->SetPixelSize(options.PixelSize);
   texturer->SetNumberOfLayers(options.Layers);
   texturer->SetLayerSpacing(options.LayerSpacing);
-  texturer->SetSheetThickness(meshReport.SheetThickness);
+  texturer->SetSheetThickness(sheetThickness);
   texturer->SetFocus(options.Focus);
-  texturer->SetAutomaticSide(automaticSide);
-  if (!automaticSide)
+  texturer->SetAutomaticSide(options.Side == "auto");
+  if (options.Side != "auto")
   {
     texturer->SetLayerSide(SideFromName(options.Side));
   }
   texturer->SetSubtractCore(CoreFromName(options.SubtractCore));
   texturer->SetLayerFilter(FilterFromName(options.Filter));
-  texturer->SetDenoisingSigma(segmentation->GetAppliedDenoisingSigma());
+  texturer->SetDenoisingSigma(denoisingSigma);
   texturer->SetMedianRadius(AutoOrLength(options.Median, "--median", -1.0));
   texturer->SetSmoothSigma(AutoOrLength(options.Smooth, "--smooth", -1.0));
   texturer->SetRestoreFWHM(RestoreFWHM(options.Restore));
-  progress.Observe(texturer);
-  texturer->Update();
-  const itk::ReadableTextureSelection & selection = texturer->GetSelection();
-  const double                          layerSpacing = texturer->GetAppliedLayerSpacing();
-  const double                          pixelSize = texturer->GetAppliedPixelSize();
-  const double displayBorder = AutoOrLength(options.DisplayBorder, "--display-border", meshReport.SheetThickness);
+  return texturer;
+}
 
-  // The per-vertex texture (surface.vtp) samples the chosen side with the same filter,
-  // without core subtraction or denoising.
+// The per-vertex texture (surface.vtp): the chosen side with the same filter, without core
+// subtraction or denoising.
+std::vector<float>
+VertexTexture(MeshType * surfaceMesh, const VolumeType * volume, const TexturerType & texturer)
+{
+  const itk::ReadableTextureSelection & selection = texturer.GetSelection();
   auto perVertex = itk::LayeredTextureMeshFilter<MeshType, VolumeType, MeshType>::New();
   perVertex->SetInput(surfaceMesh);
   perVertex->SetVolume(volume);
   perVertex->SetNumberOfLayers(selection.VertexLayers);
-  perVertex->SetLayerSpacing(layerSpacing);
+  perVertex->SetLayerSpacing(texturer.GetAppliedLayerSpacing());
   perVertex->SetFocus(selection.Depth);
   perVertex->SetLayerSide(selection.VertexSide);
   perVertex->SetLayerFilter(selection.VertexFilter);
   perVertex->Update();
-  std::vector<float> vertexTexture(surface.GetNumberOfPoints(), 0.0f);
+  std::vector<float> values(surfaceMesh->GetNumberOfPoints(), 0.0f);
   for (auto it = perVertex->GetOutput()->GetPointData()->Begin(); it != perVertex->GetOutput()->GetPointData()->End();
        ++it)
   {
-    if (it.Index() < vertexTexture.size())
+    if (it.Index() < values.size())
     {
-      vertexTexture[it.Index()] = it.Value();
+      values[it.Index()] = it.Value();
     }
   }
-  TextureType::Pointer     texture = FlipRows(texturer->GetOutput());
-  TextureMaskType::Pointer textureMask = FlipRows(texturer->GetMaskOutput());
-  LayerStackType::Pointer  layers = FlipRows(texturer->GetLayerStackOutput());
-  // The image to look at and to read: the texture less a border of the sheet, where the
-  // mid-surface meets the sheet's ends and edges and the samples mix in air.
-  TextureType::Pointer display = itk::LayerStackTexture::TrimBorder(texture, displayBorder);
-  auto                 texture8 = EightBit(display);
-  endStage("texture");
+  return values;
+}
 
-  // 6. Write everything under a temporary directory, then move it into place.
-  progress.Start("write", "writing " + options.Output);
-  // Into a staging folder beside the output, moved into place when complete: an error, a
-  // signal or a kill leaves the output as it was.
-  OutputStaging  output(outputDirectory, OutputStaging::Kind::Folder);
+// What the tool writes besides the report, as written (rows top-down).
+struct Results
+{
+  itk::SheetMesh           Surface, Flat;
+  std::vector<float>       VertexTexture;
+  TextureType::Pointer     Texture, Display;
+  Texture8Type::Pointer    Texture8;
+  TextureMaskType::Pointer Mask;
+  LayerStackType::Pointer  Layers;
+  VolumeType::Pointer      Preview;
+};
+
+void
+WriteResults(const Results & results, const TexturerType & texturer, OutputStaging & output)
+{
   const fs::path staging = output.Path();
+  const auto     textureSize = results.Texture->GetLargestPossibleRegion().GetSize();
   {
     // Images at their raw size (PNG and TIFF seldom exceed it), text meshes at ~60 bytes a
     // point and ~40 a triangle, the preview and the report.
-    const auto           textureSize = texture->GetLargestPossibleRegion().GetSize();
     const std::uintmax_t pixels = textureSize[0] * textureSize[1];
     const std::uintmax_t layerCountInStack =
-      layers->GetLargestPossibleRegion().GetNumberOfPixels() / std::max<std::uintmax_t>(1, pixels);
+      results.Layers->GetLargestPossibleRegion().GetNumberOfPixels() / std::max<std::uintmax_t>(1, pixels);
+    const auto &         surface = results.Surface;
+    const auto &         flat = results.Flat;
     const std::uintmax_t meshBytes = 2 * (60 * surface.GetNumberOfPoints() + 40 * surface.GetNumberOfTriangles()) +
                                      (60 * flat.GetNumberOfPoints() + 40 * flat.GetNumberOfTriangles());
     output.RequireSpace(pixels * (4 + 1 + 1 + 4 * layerCountInStack) + meshBytes + (8u << 20));
   }
+  WriteImageFile(results.Texture8.GetPointer(), staging / "texture.png");
+  WriteImageFile(results.Texture.GetPointer(), staging / "texture.tif");
+  auto mask8 = itk::RescaleIntensityImageFilter<TextureMaskType, TextureMaskType>::New();
+  mask8->SetInput(results.Mask);
+  mask8->SetOutputMinimum(0);
+  mask8->SetOutputMaximum(255);
+  mask8->Update();
+  WriteImageFile(mask8->GetOutput(), staging / "mask.png");
+  WriteImageFile(results.Layers.GetPointer(), staging / "layers.tif");
+  WriteSheetMeshObj((staging / "surface.obj").string(), results.Surface);
+  WriteSheetMeshVtp((staging / "surface.vtp").string(), results.Surface, results.VertexTexture, "texture");
+  // Texture coordinates: the flat point's position in texture.png, (0, 0) bottom left.
+  const double        pixelSize = texturer.GetAppliedPixelSize();
+  const auto          origin = texturer.GetOutput()->GetOrigin();
+  const double        width = textureSize[0] * pixelSize, height = textureSize[1] * pixelSize;
+  const auto &        flat = results.Flat;
+  std::vector<double> uv(2 * flat.GetNumberOfPoints());
+  for (size_t i = 0; i < flat.GetNumberOfPoints(); ++i)
+  {
+    uv[2 * i] = (flat.Points[3 * i] - (origin[0] - 0.5 * pixelSize)) / width;
+    uv[2 * i + 1] = (flat.Points[3 * i + 1] - (origin[1] - 0.5 * pixelSize)) / height;
+  }
+  WriteSheetMeshObj((staging / "flat.obj").string(), flat, uv, "texture.png");
+  WritePreview(results.Preview, results.Surface, results.Texture8, staging / "preview.png");
+}
+
+// Texture NCC against the true ink and OCR of the image a person looks at (texture.png's).
+nlohmann::json
+LegibilityJson(const GroundTruth & truth, const TextureType * texture, const TextureType * display)
+{
+  // The registration inside the fidelity measure warns about every empty overlap it tries;
+  // those are expected while it searches.
+  const bool warningsWereOn = itk::Object::GetGlobalWarningDisplay();
+  itk::Object::GlobalWarningDisplayOff();
+  auto fidelity = itk::TextureFidelityCalculator::New();
+  fidelity->SetReference(truth.Ink);
+  fidelity->SetTexture(texture);
+  fidelity->Compute();
+  auto legibility = itk::TextLegibility::New();
+  legibility->SetImage(display);
+  legibility->SetTruthText(truth.Text);
+  legibility->Compute();
+  itk::Object::SetGlobalWarningDisplay(warningsWereOn);
+  return { { "texture_ncc", fidelity->GetNormalizedCrossCorrelation() },
+           { "mirrored", fidelity->GetMirrored() },
+           { "rotation_degrees", fidelity->GetRotationDegrees() },
+           { "character_error_rate", legibility->GetCharacterErrorRate() },
+           { "recognized_text", legibility->GetRecognizedText() },
+           { "truth_text", truth.Text } };
+}
+
+// Read, segment, mesh, unroll and flatten, texture, write; each stage one of the module's
+// filters, the results staged and moved into place when complete.
+void
+RunUnwrap(UnwrapOptions & options)
+{
+  Progress                 progress(options.Quiet, options.JsonLog);
+  StageClock               clock(progress);
+  nlohmann::json           report;
+  std::vector<std::string> warnings;
+  const double             threshold = CheckUnwrapOptions(options);
+  const GroundTruth        truth = ReadGroundTruth(options.GroundTruth);
+
+  clock.Start("read", "reading " + options.Input);
+  const Scan scan = ReadScan(options, progress, report["input"], warnings);
+  clock.End("read");
+
+  clock.Start("segment", "segmenting the sheet");
+  auto segmentation = itk::SheetSegmentationImageFilter<VolumeType, MaskType>::New();
+  segmentation->SetInput(scan.Filled.Volume);
+  segmentation->SetAutomaticThreshold(std::isnan(threshold));
+  segmentation->SetThreshold(std::isnan(threshold) ? 0.0 : threshold);
+  progress.Observe(segmentation);
+  segmentation->Update();
+  clock.End("segment");
+
+  clock.Start("mesh", "meshing the sheet's mid-surface");
+  auto surfaceFilter = itk::SheetMidSurfaceMeshFilter<MaskType, MeshType>::New();
+  surfaceFilter->SetInput(segmentation->GetOutput());
+  surfaceFilter->SetIntensityImage(scan.Filled.Volume);
+  surfaceFilter->SetMethod(itk::SheetSurfaceMethodFromString(options.Method));
+  surfaceFilter->SetSpacingAlongSheet(options.MeshSpacing);
+  surfaceFilter->SetSpacingAlongAxis(options.MeshSpacing);
+  progress.Observe(surfaceFilter);
+  surfaceFilter->Update();
+  Results results;
+  results.Surface = surfaceFilter->GetSheetMesh();
+  const auto & meshReport = surfaceFilter->GetReport();
+  for (const auto & w : meshReport.Warnings)
+  {
+    warnings.push_back("mesh: " + w);
+  }
+  clock.End("mesh");
+
+  clock.Start("flatten", "unrolling and flattening by mass-spring simulation");
+  itk::MassSpringSheetFlattener flattener;
+  flattener.SetParameters(ResolveSimulationParameters(options.Simulation, results.Surface));
+  flattener.SetStepCallback([&progress](itk::MassSpringSystem &, const std::string & phase, uint64_t step) {
+    progress.Tick(phase, step);
+    return true;
+  });
+  results.Flat = flattener.Flatten(results.Surface);
+  clock.End("flatten");
+
+  clock.Start("texture", "sampling the layered texture");
+  auto texturer = MakeTexturer(options, meshReport.SheetThickness, segmentation->GetAppliedDenoisingSigma());
+  auto surfaceMesh = itk::SheetMeshToMesh<MeshType>(results.Surface);
+  texturer->SetSurfaceMesh(surfaceMesh);
+  texturer->SetFlatMesh(itk::SheetMeshToMesh<MeshType>(results.Flat));
+  texturer->SetVolume(scan.Volume);
+  progress.Observe(texturer);
+  texturer->Update();
+  results.VertexTexture = VertexTexture(surfaceMesh, scan.Volume, *texturer);
+  results.Texture = FlipRows(texturer->GetOutput());
+  results.Mask = FlipRows(texturer->GetMaskOutput());
+  results.Layers = FlipRows(texturer->GetLayerStackOutput());
+  // The image to look at and to read: the texture less a border of the sheet, where the
+  // mid-surface meets the sheet's ends and edges and the samples mix in air.
+  const double displayBorder = AutoOrLength(options.DisplayBorder, "--display-border", meshReport.SheetThickness);
+  results.Display = itk::LayerStackTexture::TrimBorder(results.Texture, displayBorder);
+  results.Texture8 = EightBit(results.Display);
+  results.Preview = scan.Filled.Volume;
+  clock.End("texture");
+
+  // Into a staging folder beside the output, moved into place when complete: an error, a
+  // signal or a kill leaves the output as it was.
+  clock.Start("write", "writing " + options.Output);
+  OutputStaging output(fs::path(options.Output), OutputStaging::Kind::Folder);
   try
   {
-    WriteImageFile(texture8.GetPointer(), staging / "texture.png");
-    WriteImageFile(texture.GetPointer(), staging / "texture.tif");
-    auto mask8 = itk::RescaleIntensityImageFilter<TextureMaskType, TextureMaskType>::New();
-    mask8->SetInput(textureMask);
-    mask8->SetOutputMinimum(0);
-    mask8->SetOutputMaximum(255);
-    mask8->Update();
-    WriteImageFile(mask8->GetOutput(), staging / "mask.png");
-    WriteImageFile(layers.GetPointer(), staging / "layers.tif");
-    WriteSheetMeshObj((staging / "surface.obj").string(), surface);
-    WriteSheetMeshVtp((staging / "surface.vtp").string(), surface, vertexTexture, "texture");
-    // Texture coordinates: the flat point's position in texture.png, (0, 0) bottom left.
-    const auto          tOrigin = texturer->GetOutput()->GetOrigin();
-    const auto          tSize = texturer->GetOutput()->GetLargestPossibleRegion().GetSize();
-    const double        width = tSize[0] * pixelSize, height = tSize[1] * pixelSize;
-    std::vector<double> uv(2 * flat.GetNumberOfPoints());
-    for (size_t i = 0; i < flat.GetNumberOfPoints(); ++i)
-    {
-      uv[2 * i] = (flat.Points[3 * i] - (tOrigin[0] - 0.5 * pixelSize)) / width;
-      uv[2 * i + 1] = (flat.Points[3 * i + 1] - (tOrigin[1] - 0.5 * pixelSize)) / height;
-    }
-    WriteSheetMeshObj((staging / "flat.obj").string(), flat, uv, "texture.png");
-    WritePreview(filled.Volume, surface, texture8, staging / "preview.png");
+    WriteResults(results, *texturer, output);
   }
   catch (const std::bad_alloc &)
   {
@@ -682,11 +809,12 @@ RunUnwrap(UnwrapOptions & options)
   {
     throw UsageError("cannot write the results into " + options.Output + ": " + e.what());
   }
-  endStage("write");
+  clock.End("write");
 
-  // 7. Measures: distortion, and against the ground truth when there is one.
+  // Measures: distortion, and against the ground truth when there is one.
+  const itk::SheetMesh & surface = results.Surface;
   report["parameters"] = { { "threshold",
-                             { { "value", segmentation->GetThreshold() }, { "automatic", automaticThreshold } } },
+                             { { "value", segmentation->GetThreshold() }, { "automatic", std::isnan(threshold) } } },
                            { "mesh",
                              { { "method", itk::ToString(meshReport.Method) },
                                { "spacing_along_sheet_mm", meshReport.SpacingAlongSheet },
@@ -701,42 +829,22 @@ RunUnwrap(UnwrapOptions & options)
                      { "minimum_curvature_radius_mm", meshReport.MinimumCurvatureRadius },
                      { "trace", TraceJson(meshReport) } };
   report["simulation"] = ToJson(flattener.GetReport());
-  report["distortion"] = DistortionJson(surface, flat);
-  report["texture"] = {
-    { "size", { texture->GetLargestPossibleRegion().GetSize()[0], texture->GetLargestPossibleRegion().GetSize()[1] } },
-    { "sheet_pixels", texturer->GetTextureFilter()->GetNumberOfSheetPixels() },
-    { "clamped_samples", texturer->GetTextureFilter()->GetNumberOfClampedSamples() }
-  };
-  if (truthInk)
+  report["distortion"] = DistortionJson(surface, results.Flat);
+  const auto textureSize = results.Texture->GetLargestPossibleRegion().GetSize();
+  report["texture"] = { { "size", { textureSize[0], textureSize[1] } },
+                        { "sheet_pixels", texturer->GetTextureFilter()->GetNumberOfSheetPixels() },
+                        { "clamped_samples", texturer->GetTextureFilter()->GetNumberOfClampedSamples() } };
+  if (truth.Ink)
   {
-    progress.Start("score", "comparing with the ground truth");
-    // The registration inside the fidelity measure warns about every empty overlap it
-    // tries; those are expected while it searches.
-    const bool warningsWereOn = itk::Object::GetGlobalWarningDisplay();
-    itk::Object::GlobalWarningDisplayOff();
-    auto fidelity = itk::TextureFidelityCalculator::New();
-    fidelity->SetReference(truthInk);
-    fidelity->SetTexture(texture);
-    fidelity->Compute();
-    // OCR reads the image a person looks at (texture.png's).
-    auto legibility = itk::TextLegibility::New();
-    legibility->SetImage(display);
-    legibility->SetTruthText(truthText);
-    legibility->Compute();
-    itk::Object::SetGlobalWarningDisplay(warningsWereOn);
-    report["legibility"] = { { "texture_ncc", fidelity->GetNormalizedCrossCorrelation() },
-                             { "mirrored", fidelity->GetMirrored() },
-                             { "rotation_degrees", fidelity->GetRotationDegrees() },
-                             { "character_error_rate", legibility->GetCharacterErrorRate() },
-                             { "recognized_text", legibility->GetRecognizedText() },
-                             { "truth_text", truthText } };
-    endStage("score");
+    clock.Start("score", "comparing with the ground truth");
+    report["legibility"] = LegibilityJson(truth, results.Texture, results.Display);
+    clock.End("score");
   }
-  report["stages"] = stages;
+  report["stages"] = clock.Stages();
   report["warnings"] = warnings;
-  report["seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  report["seconds"] = clock.Seconds();
   report["peak_memory_mib"] = PeakMemoryMiB();
-  WriteTextFileAtomically((staging / "report.json").string(), report.dump(2) + "\n");
+  WriteTextFileAtomically((output.Path() / "report.json").string(), report.dump(2) + "\n");
   output.Commit();
   progress.Finish(options.Output, report);
 }
