@@ -133,9 +133,12 @@ public:
     return m_Parameters.LockedParticles;
   }
 
-  /** The parameters as MassSpringSheetFlattener takes them. */
+  /** The parameters as MassSpringSheetFlattener takes them; Set takes all of them at once
+   * (the number of work units stays the filter's own). */
   MassSpringFlatteningParameters
   GetParameters() const;
+  void
+  SetParameters(const MassSpringFlatteningParameters & parameters);
 
   /** During an update (from an IterationEvent observer): the running system, its phase
    * ("unroll", "flatten", "relax", "relax-full") and the step within the phase. */

@@ -33,6 +33,17 @@ MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::GetParameters() const
 
 template <typename TInputMesh, typename TOutputMesh>
 void
+MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::SetParameters(
+  const MassSpringFlatteningParameters & parameters)
+{
+  const unsigned int workUnits = m_Parameters.NumberOfWorkUnits;
+  m_Parameters = parameters;
+  m_Parameters.NumberOfWorkUnits = workUnits;
+  this->Modified();
+}
+
+template <typename TInputMesh, typename TOutputMesh>
+void
 MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::GenerateData()
 {
   const InputMeshType * input = this->GetInput();

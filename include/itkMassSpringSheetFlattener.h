@@ -46,7 +46,9 @@ public:
     /** Grid meshes: the end column nearer the roll's axis. */
     InnerEdge,
     /** The particles listed in MassSpringFlatteningParameters::LockedParticles. */
-    Custom
+    Custom,
+    /** OuterEdge on a grid mesh (a rolled sheet's mid-surface), None on any other mesh. */
+    Auto
   };
 };
 /** Shorter name used throughout the module. */
@@ -127,7 +129,7 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningParameters
    * implicit, quasi-static solver). */
   MassSpringIntegratorEnum Integrator{ MassSpringIntegratorEnum::ImplicitEuler };
   /** Unroll phase: hold an edge and let gravity unfurl the sheet. */
-  SheetLockedEdgeEnum   LockedEdge{ SheetLockedEdgeEnum::OuterEdge };
+  SheetLockedEdgeEnum   LockedEdge{ SheetLockedEdgeEnum::Auto };
   std::vector<uint32_t> LockedParticles;
   /** Threads for the force loops (0: ITK's default). */
   unsigned int NumberOfWorkUnits{ 0 };
@@ -148,6 +150,8 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
     double      RelativeResidualForce{ 0.0 };
   };
   std::vector<Phase> Phases;
+  /** What the unroll phase held (Auto resolved). */
+  SheetLockedEdgeEnum LockedEdge{ SheetLockedEdgeEnum::None };
   size_t             Particles{ 0 };
   size_t             SimulatedParticles{ 0 };
   size_t             Springs{ 0 };

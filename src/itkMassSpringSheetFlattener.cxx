@@ -43,6 +43,8 @@ ToString(SheetLockedEdgeEnum edge)
       return "inner";
     case SheetLockedEdgeEnum::Custom:
       return "custom";
+    case SheetLockedEdgeEnum::Auto:
+      return "auto";
   }
   return "unknown";
 }
@@ -53,14 +55,15 @@ SheetLockedEdgeFromString(const std::string & name)
   for (auto e : { SheetLockedEdgeEnum::None,
                   SheetLockedEdgeEnum::OuterEdge,
                   SheetLockedEdgeEnum::InnerEdge,
-                  SheetLockedEdgeEnum::Custom })
+                  SheetLockedEdgeEnum::Custom,
+                  SheetLockedEdgeEnum::Auto })
   {
     if (name == ToString(e))
     {
       return e;
     }
   }
-  throw std::invalid_argument("unknown locked edge '" + name + "' (none, outer, inner, custom)");
+  throw std::invalid_argument("unknown locked edge '" + name + "' (none, outer, inner, custom, auto)");
 }
 
 namespace {
@@ -698,7 +701,12 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   const auto start = Clock::now();
   surface.Validate("mass-spring flattening input");
   m_Report = MassSpringFlatteningReport();
-  const MassSpringFlatteningParameters & p = m_Parameters;
+  MassSpringFlatteningParameters p = m_Parameters;
+  if (p.LockedEdge == SheetLockedEdgeEnum::Auto)
+  {
+    p.LockedEdge = surface.IsGridStructured() ? SheetLockedEdgeEnum::OuterEdge : SheetLockedEdgeEnum::None;
+  }
+  m_Report.LockedEdge = p.LockedEdge;
   // Every numeric parameter within its range (a NaN in none).
 #define VU_MASS_SPRING_CHECK_RANGE(type, name, value, lowest, highest, option, key, meaning)                           \
   if (!(static_cast<double>(p.name) >= static_cast<double>(lowest) &&                                                  \

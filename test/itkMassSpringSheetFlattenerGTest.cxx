@@ -189,6 +189,23 @@ TEST(MassSpringSheetFlattener, CallbackSeesEveryPhaseAndCanAbort)
   EXPECT_THROW(flattener.Flatten(surface), itk::ExceptionObject);
 }
 
+// The default edge, Auto: a grid mesh (a rolled sheet's mid-surface) is unrolled from its
+// outer edge, any other mesh only dropped onto the plane.
+TEST(MassSpringSheetFlattener, AutomaticLockedEdge)
+{
+  itk::MassSpringSheetFlattener flattener;
+  EXPECT_EQ(flattener.GetParameters().LockedEdge, itk::SheetLockedEdgeEnum::Auto);
+  itk::SheetMesh triangle;
+  triangle.Points = { 0, 0, 0, 1, 0, 0, 0, 1, 0.2 };
+  triangle.Triangles = { 0, 1, 2 };
+  flattener.Flatten(triangle);
+  EXPECT_EQ(flattener.GetReport().LockedEdge, itk::SheetLockedEdgeEnum::None);
+  flattener.Flatten(vu::SpiralRollMesh(10.0, 4.0, 2.0, 4.0, 20.0, nullptr));
+  EXPECT_EQ(flattener.GetReport().LockedEdge, itk::SheetLockedEdgeEnum::OuterEdge);
+  EXPECT_EQ(flattener.GetParameters().LockedEdge, itk::SheetLockedEdgeEnum::Auto);
+  EXPECT_EQ(itk::SheetLockedEdgeFromString("auto"), itk::SheetLockedEdgeEnum::Auto);
+}
+
 TEST(MassSpringSheetFlattener, RejectsBadInput)
 {
   itk::MassSpringSheetFlattener flattener;
@@ -201,8 +218,10 @@ TEST(MassSpringSheetFlattener, RejectsBadInput)
   triangle.Points = { 0, 0, 0, 1, 0, 0, 0, 1, 0 };
   triangle.Triangles = { 0, 1, 2 };
   // An outer edge needs a grid.
-  EXPECT_THROW(flattener.Flatten(triangle), itk::ExceptionObject);
   itk::MassSpringFlatteningParameters parameters;
+  parameters.LockedEdge = itk::SheetLockedEdgeEnum::OuterEdge;
+  flattener.SetParameters(parameters);
+  EXPECT_THROW(flattener.Flatten(triangle), itk::ExceptionObject);
   parameters.LockedEdge = itk::SheetLockedEdgeEnum::Custom;
   parameters.LockedParticles = { 7 };
   flattener.SetParameters(parameters);

@@ -30,7 +30,7 @@
 #include "itkImageFileWriter.h"
 #include "itkLayerStackTexture.h"
 #include "itkLayeredTextureMeshFilter.h"
-#include "itkMassSpringSheetFlattener.h"
+#include "itkMassSpringFlatteningMeshFilter.h"
 #include "itkReadableTextureImageFilter.h"
 #include "itkRescaleIntensityImageFilter.h"
 #include "itkSheetMeshAdaptor.h"
@@ -60,7 +60,8 @@ constexpr double UnwrapBytesPerVoxel = 48.0;
 namespace fs = std::filesystem;
 using VolumeType = itk::Image<float, 3>;
 using MaskType = itk::Image<unsigned char, 3>;
-using MeshType = itk::Mesh<float, 3>;
+// Every stage passes the sheet as this mesh (double precision, as the simulation works).
+using MeshType = itk::Mesh<double, 3>;
 using TextureType = itk::Image<float, 2>;
 using TextureMaskType = itk::Image<unsigned char, 2>;
 using LayerStackType = itk::Image<float, 3>;
@@ -759,24 +760,24 @@ RunUnwrap(UnwrapOptions & options)
   clock.End("mesh");
 
   clock.Start("flatten", "unrolling and flattening by mass-spring simulation");
-  itk::MassSpringSheetFlattener flattener;
-  flattener.SetParameters(ResolveSimulationParameters(options.Simulation, results.Surface));
-  flattener.SetStepCallback([&progress](itk::MassSpringSystem &, const std::string & phase, uint64_t step) {
-    progress.Tick(phase, step);
-    return true;
+  auto flattening = itk::MassSpringFlatteningMeshFilter<MeshType>::New();
+  flattening->SetInput(surfaceFilter->GetOutput());
+  flattening->SetParameters(ResolveSimulationParameters(options.Simulation, results.Surface));
+  flattening->AddObserver(itk::IterationEvent(), [&progress, &flattening](const itk::EventObject &) {
+    progress.Tick(flattening->GetCurrentPhase(), flattening->GetCurrentStep());
   });
-  results.Flat = flattener.Flatten(results.Surface);
+  flattening->Update();
+  results.Flat = itk::MeshToSheetMesh(flattening->GetOutput());
   clock.End("flatten");
 
   clock.Start("texture", "sampling the layered texture");
   auto texturer = MakeTexturer(options, meshReport.SheetThickness, segmentation->GetAppliedDenoisingSigma());
-  auto surfaceMesh = itk::SheetMeshToMesh<MeshType>(results.Surface);
-  texturer->SetSurfaceMesh(surfaceMesh);
-  texturer->SetFlatMesh(itk::SheetMeshToMesh<MeshType>(results.Flat));
+  texturer->SetSurfaceMesh(surfaceFilter->GetOutput());
+  texturer->SetFlatMesh(flattening->GetOutput());
   texturer->SetVolume(scan.Volume);
   progress.Observe(texturer);
   texturer->Update();
-  results.VertexTexture = VertexTexture(surfaceMesh, scan.Volume, *texturer);
+  results.VertexTexture = VertexTexture(surfaceFilter->GetOutput(), scan.Volume, *texturer);
   results.Texture = FlipRows(texturer->GetOutput());
   results.Mask = FlipRows(texturer->GetMaskOutput());
   results.Layers = FlipRows(texturer->GetLayerStackOutput());
@@ -820,7 +821,7 @@ RunUnwrap(UnwrapOptions & options)
                                { "spacing_along_sheet_mm", meshReport.SpacingAlongSheet },
                                { "spacing_along_axis_mm", meshReport.SpacingAlongAxis } } },
                            { "texture", TextureParametersJson(*texturer, options, displayBorder) },
-                           { "simulation", ToJson(flattener.GetParameters()) } };
+                           { "simulation", ToJson(flattening->GetParameters()) } };
   report["mesh"] = { { "points", surface.GetNumberOfPoints() },
                      { "triangles", surface.GetNumberOfTriangles() },
                      { "grid", { surface.GridRows, surface.GridColumns } },
@@ -828,7 +829,7 @@ RunUnwrap(UnwrapOptions & options)
                      { "sheet_length_mm", meshReport.SheetLength },
                      { "minimum_curvature_radius_mm", meshReport.MinimumCurvatureRadius },
                      { "trace", TraceJson(meshReport) } };
-  report["simulation"] = ToJson(flattener.GetReport());
+  report["simulation"] = ToJson(flattening->GetReport());
   report["distortion"] = DistortionJson(surface, results.Flat);
   const auto textureSize = results.Texture->GetLargestPossibleRegion().GetSize();
   report["texture"] = { { "size", { textureSize[0], textureSize[1] } },

@@ -113,14 +113,11 @@ ResolveSimulationParameters(const SimulationOptions & options, const itk::SheetM
     p.LockedEdge = itk::SheetLockedEdgeEnum::Custom;
     p.LockedParticles = options.LockedParticles;
   }
-  else if (options.LockedEdge == "auto")
-  {
-    p.LockedEdge = mesh.IsGridStructured() ? itk::SheetLockedEdgeEnum::OuterEdge : itk::SheetLockedEdgeEnum::None;
-  }
   else
   {
     p.LockedEdge = itk::SheetLockedEdgeFromString(options.LockedEdge);
-    if (p.LockedEdge != itk::SheetLockedEdgeEnum::None && !mesh.IsGridStructured())
+    if (p.LockedEdge != itk::SheetLockedEdgeEnum::None && p.LockedEdge != itk::SheetLockedEdgeEnum::Auto &&
+        !mesh.IsGridStructured())
     {
       throw UsageError("--locked-edge " + options.LockedEdge +
                        " needs a grid mesh (a .vtp with GridRow/GridColumn); give --lock ids instead");
@@ -156,7 +153,8 @@ ToJson(const itk::MassSpringFlatteningReport & report)
                        { "relative_kinetic_energy", phase.RelativeKineticEnergy },
                        { "relative_residual_force", phase.RelativeResidualForce } });
   }
-  return { { "particles", report.Particles },
+  return { { "locked_edge", itk::ToString(report.LockedEdge) },
+           { "particles", report.Particles },
            { "simulated_particles", report.SimulatedParticles },
            { "springs", report.Springs },
            { "coarsening_factor", report.CoarseningFactor },
