@@ -92,6 +92,14 @@ ComponentTypeName(IOComponentEnum type, size_t bytes);
 std::string
 SizeText(const ImageIOBase * io);
 
+/** The most image bytes `bytes` of deflate (zlib, gzip) data can hold: about 1000 to 1 at
+ * best, with room for a small image. */
+inline double
+DeflateCanHold(double bytes)
+{
+  return 1100.0 * bytes + 65536.0;
+}
+
 /** Why the text header of a MetaImage (.mha, .mhd) cannot be handed to MetaIO, or "":
  * NDims not a whole number from 1 to 10, DimSize not NDims positive whole numbers. */
 std::string

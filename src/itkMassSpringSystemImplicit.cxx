@@ -1,0 +1,204 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// MassSpringSystem's implicit (backward Euler) step and quasi-static relaxation.
+#include "itkMassSpringSystem.h"
+#include "vuImplicitSolver.h"
+
+#include "itkMacro.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+namespace itk {
+void
+MassSpringSystem::StepImplicit(bool quasiStatic)
+{
+  using SparseMatrix = ImplicitSolver::SparseMatrix;
+  if (!m_AdjacencyValid)
+  {
+    BuildAdjacency();
+  }
+  const size_t     n = m_Masses.size();
+  const double     h = m_TimeStep;
+  const double     invH2 = 1.0 / (h * h);
+  ImplicitSolver & solver = *m_Solver;
+  if (!solver.valid)
+  {
+    solver.freeIndex.assign(n, -1);
+    solver.freeParticles.clear();
+    for (size_t i = 0; i < n; ++i)
+    {
+      if (!m_Locked[i])
+      {
+        solver.freeIndex[i] = static_cast<int32_t>(solver.freeParticles.size());
+        solver.freeParticles.push_back(static_cast<uint32_t>(i));
+      }
+    }
+    const auto                          nf = static_cast<Eigen::Index>(solver.freeParticles.size());
+    std::vector<Eigen::Triplet<double>> triplets;
+    triplets.reserve(nf + 4 * m_SpringI.size());
+    for (Eigen::Index r = 0; r < nf; ++r)
+    {
+      triplets.emplace_back(r, r, m_Masses[solver.freeParticles[r]] * invH2);
+    }
+    for (size_t s = 0; s < m_SpringI.size(); ++s)
+    {
+      const int32_t a = solver.freeIndex[m_SpringI[s]];
+      const int32_t b = solver.freeIndex[m_SpringJ[s]];
+      const double  k = m_Stiffness[s];
+      if (a >= 0)
+      {
+        triplets.emplace_back(a, a, k);
+      }
+      if (b >= 0)
+      {
+        triplets.emplace_back(b, b, k);
+      }
+      if (a >= 0 && b >= 0)
+      {
+        triplets.emplace_back(a, b, -k);
+        triplets.emplace_back(b, a, -k);
+      }
+    }
+    SparseMatrix A(nf, nf);
+    A.setFromTriplets(triplets.begin(), triplets.end());
+    solver.ldlt.compute(A);
+    if (solver.ldlt.info() != Eigen::Success)
+    {
+      itkGenericExceptionMacro(<< "MassSpringSystem: factorisation of the implicit system failed");
+    }
+    solver.timeStep = h;
+    solver.valid = true;
+  }
+
+  const auto          nf = static_cast<Eigen::Index>(solver.freeParticles.size());
+  Eigen::MatrixXd     y(nf, 3), rhs(nf, 3), solution(nf, 3);
+  const double        dampingFactor = 1.0 / (1.0 + m_Damping * h);
+  std::vector<double> xPrevious = m_X;
+  for (Eigen::Index r = 0; r < nf; ++r)
+  {
+    const size_t i = solver.freeParticles[r];
+    for (int d = 0; d < 3; ++d)
+    {
+      y(r, d) = m_X[3 * i + d] + h * dampingFactor * m_V[3 * i + d] + h * h * m_Gravity[d];
+    }
+  }
+  // Start the iterations from the inertial prediction.
+  for (Eigen::Index r = 0; r < nf; ++r)
+  {
+    const size_t i = solver.freeParticles[r];
+    for (int d = 0; d < 3; ++d)
+    {
+      m_X[3 * i + d] = y(r, d);
+    }
+  }
+  const uint64_t *  start = m_AdjacencyStart.data();
+  const Neighbour * adjacency = m_Adjacency.data();
+  for (unsigned int iteration = 0; iteration < m_ImplicitIterations; ++iteration)
+  {
+    const double * x = m_X.data();
+    // Local step (each spring projected to its rest length) gathered into the global
+    // step's right-hand side, particle by particle.
+    ParallelFor(static_cast<size_t>(nf), [&](size_t begin, size_t end) {
+      for (size_t r = begin; r < end; ++r)
+      {
+        const size_t i = solver.freeParticles[r];
+        const double m = m_Masses[i] * invH2;
+        double       b[3] = { m * y(r, 0), m * y(r, 1), m * y(r, 2) };
+        for (uint64_t e = start[i]; e < start[i + 1]; ++e)
+        {
+          const Neighbour & nb = adjacency[e];
+          const double *    xj = x + 3 * nb.other;
+          const double      d[3] = { x[3 * i] - xj[0], x[3 * i + 1] - xj[1], x[3 * i + 2] - xj[2] };
+          const double      len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+          const double      scale = len > 0.0 ? nb.stiffness * nb.restLength / len : 0.0;
+          for (int c = 0; c < 3; ++c)
+          {
+            b[c] += scale * d[c];
+            if (m_Locked[nb.other])
+            {
+              b[c] += nb.stiffness * xj[c];
+            }
+          }
+        }
+        rhs(r, 0) = b[0];
+        rhs(r, 1) = b[1];
+        rhs(r, 2) = b[2];
+      }
+    });
+    // A sheet lying on a coordinate plane (the final relaxation) has a zero column: skip it.
+    for (int d = 0; d < 3; ++d)
+    {
+      if (rhs.col(d).isZero(0.0))
+      {
+        solution.col(d).setZero();
+      }
+      else
+      {
+        solution.col(d) = solver.ldlt.solve(rhs.col(d));
+      }
+    }
+    for (Eigen::Index r = 0; r < nf; ++r)
+    {
+      const size_t i = solver.freeParticles[r];
+      for (int d = 0; d < 3; ++d)
+      {
+        m_X[3 * i + d] = solution(r, d);
+      }
+    }
+    ++m_ForceEvaluations;
+  }
+  const double invH = quasiStatic ? 0.0 : 1.0 / h;
+  for (size_t k = 0; k < m_X.size(); ++k)
+  {
+    m_V[k] = (m_X[k] - xPrevious[k]) * invH;
+  }
+  ApplyConstraintsAndCollisions(m_X.data(), m_V.data());
+}
+
+void
+MassSpringSystem::Relax(unsigned int iterations)
+{
+  if (m_Masses.empty())
+  {
+    itkGenericExceptionMacro(<< "MassSpringSystem: no particles");
+  }
+  const unsigned int saved = m_ImplicitIterations;
+  m_ImplicitIterations = iterations;
+  try
+  {
+    StepImplicit(true);
+  }
+  catch (...)
+  {
+    m_ImplicitIterations = saved;
+    throw;
+  }
+  m_ImplicitIterations = saved;
+  for (double c : m_X)
+  {
+    if (!std::isfinite(c))
+    {
+      throw MassSpringDivergenceError("mass-spring relaxation diverged (non-finite state) with " + Describe());
+    }
+  }
+}
+
+} // end namespace itk

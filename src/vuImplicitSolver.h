@@ -1,0 +1,46 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef vuImplicitSolver_h
+#define vuImplicitSolver_h
+
+#include "itkMassSpringSystem.h"
+#include "itkMultiThreaderBase.h"
+#include "itk_eigen.h"
+#include ITK_EIGEN(Sparse)
+#include ITK_EIGEN(SparseCholesky)
+
+#include <cstdint>
+#include <vector>
+
+namespace itk {
+/** The implicit integrator's factorised system matrix and the particles it solves for. */
+struct MassSpringSystem::ImplicitSolver
+{
+  using SparseMatrix = Eigen::SparseMatrix<double>;
+  Eigen::SimplicialLDLT<SparseMatrix> ldlt;
+  std::vector<int32_t>                freeIndex; // particle -> row, or -1 when locked
+  std::vector<uint32_t>               freeParticles;
+  double                              timeStep{ 0.0 };
+  bool                                valid{ false };
+  // Kept for the engine's lifetime: creating a threader per force loop costs more than a
+  // small system's whole step.
+  MultiThreaderBase::Pointer threader;
+};
+} // end namespace itk
+
+#endif
