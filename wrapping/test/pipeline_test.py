@@ -93,6 +93,14 @@ print(f"[ figures ] numpy NCC on the aligned texture {numpy_ncc:.4f} over {valid
 assert ncc >= 0.85, ncc
 assert numpy_ncc >= 0.85, numpy_ncc
 
+# The Python example (examples/unwrap_scroll.py), the same job in a page, reads as well.
+example = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "examples", "unwrap_scroll.py")
+example_texture = os.path.join(output_dir, "example.tif")
+subprocess.run([sys.executable, example, series_dir, example_texture], check=True)
+example_ncc = vu_pipeline.texture_ncc(ink, itk.imread(example_texture, itk.F)).GetNormalizedCrossCorrelation()
+print(f"[ figures ] examples/unwrap_scroll.py texture NCC {example_ncc:.4f}")
+assert abs(example_ncc - ncc) <= 0.01, (example_ncc, ncc)
+
 # 5. The C++ tool on the same series must agree.
 if tool:
     # The tool links the system's ITK: run it without the test driver's library path, which

@@ -1,0 +1,35 @@
+# Runs the C++ example on the standard phantom: it must write the very texture.tif that
+# `virtual-unwrap unwrap` writes with default options (one pipeline, in the library).
+file(REMOVE_RECURSE ${WORK})
+file(MAKE_DIRECTORY ${WORK})
+execute_process(COMMAND ${TOOL} phantom standard -o ${WORK}/phantom --format mha RESULT_VARIABLE rc OUTPUT_QUIET)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "phantom failed: ${rc}")
+endif()
+execute_process(COMMAND ${EXAMPLE} ${WORK}/phantom/volume.mha ${WORK}/texture.tif
+  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message(STATUS "${out}${err}")
+if(NOT rc EQUAL 0 OR NOT EXISTS ${WORK}/texture.tif)
+  message(FATAL_ERROR "UnwrapScroll failed (${rc})")
+endif()
+if(NOT out MATCHES "texture \\[([0-9]+), ([0-9]+)\\] pixels")
+  message(FATAL_ERROR "UnwrapScroll did not report its texture")
+endif()
+if(CMAKE_MATCH_1 LESS 100 OR CMAKE_MATCH_2 LESS 50)
+  message(FATAL_ERROR "texture of ${CMAKE_MATCH_1} x ${CMAKE_MATCH_2} pixels: the sheet was not unwrapped")
+endif()
+execute_process(COMMAND ${TOOL} unwrap ${WORK}/phantom/volume.mha -o ${WORK}/tool RESULT_VARIABLE rc OUTPUT_QUIET
+  ERROR_QUIET)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "virtual-unwrap unwrap failed: ${rc}")
+endif()
+execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files ${WORK}/texture.tif ${WORK}/tool/texture.tif
+  RESULT_VARIABLE differ)
+if(NOT differ EQUAL 0)
+  message(FATAL_ERROR "the example's texture differs from the tool's")
+endif()
+# A bad input: one line on standard error, exit 1.
+execute_process(COMMAND ${EXAMPLE} ${WORK}/missing.mha ${WORK}/missing.tif RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 1 OR EXISTS ${WORK}/missing.tif)
+  message(FATAL_ERROR "a missing input gave exit ${rc}: ${err}")
+endif()
