@@ -60,7 +60,7 @@ RunMassSpring(std::ostream &                              out,
     {
       if (phase.StopReason != "converged")
       {
-        status = phase.Name + " " + phase.StopReason;
+        status = itk::ToString(phase.Name) + std::string(" ") + phase.StopReason;
       }
     }
     vu::WriteFlatteningCsvRow(out, meshName, surface, flat, method, setting, seconds, status, false);

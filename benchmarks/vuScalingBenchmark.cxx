@@ -90,7 +90,7 @@ main(int argc, char * argv[])
       for (const auto & phase : report.Phases)
       {
         steps += phase.Steps;
-        reasons += (reasons.empty() ? "" : ";") + phase.Name + ":" + phase.StopReason;
+        reasons += std::string(reasons.empty() ? "" : ";") + itk::ToString(phase.Name) + ":" + phase.StopReason;
       }
       auto distortion = itk::FlatteningDistortionCalculator::New();
       distortion->SetSurfaceMesh(mesh);

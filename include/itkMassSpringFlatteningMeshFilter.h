@@ -141,13 +141,13 @@ public:
   SetParameters(const MassSpringFlatteningParameters & parameters);
 
   /** During an update (from an IterationEvent observer): the running system, its phase
-   * ("unroll", "flatten", "relax", "relax-full") and the step within the phase. */
+   * and the step within the phase. */
   MassSpringSystem *
   GetCurrentSystem() const
   {
     return m_CurrentSystem;
   }
-  const std::string &
+  SheetFlatteningPhaseEnum
   GetCurrentPhase() const
   {
     return m_CurrentPhase;
@@ -180,7 +180,7 @@ private:
 
   MassSpringFlatteningReport m_Report;
   MassSpringSystem *         m_CurrentSystem{ nullptr };
-  std::string                m_CurrentPhase;
+  SheetFlatteningPhaseEnum   m_CurrentPhase{ SheetFlatteningPhaseEnum::Unroll };
   uint64_t                   m_CurrentStep{ 0 };
 };
 
@@ -192,6 +192,11 @@ operator<<(std::ostream & os, MassSpringIntegratorEnum e)
 }
 inline std::ostream &
 operator<<(std::ostream & os, SheetLockedEdgeEnum e)
+{
+  return os << ToString(e);
+}
+inline std::ostream &
+operator<<(std::ostream & os, SheetFlatteningPhaseEnum e)
 {
   return os << ToString(e);
 }

@@ -53,23 +53,25 @@ MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::GenerateData()
   flattener.SetParameters(this->GetParameters());
   // Progress: each phase advances a share of the bar as its steps approach the limit.
   const double stepLimit = m_Parameters.MaximumStepsPerPhase;
-  flattener.SetStepCallback([this, stepLimit](MassSpringSystem & system, const std::string & phase, uint64_t step) {
+  using Phase = SheetFlatteningPhaseEnum;
+  flattener.SetStepCallback([this, stepLimit](MassSpringSystem & system, Phase phase, uint64_t step) {
     m_CurrentSystem = &system;
     m_CurrentPhase = phase;
     m_CurrentStep = step;
     this->InvokeEvent(IterationEvent());
     double base = 0.0, share = 0.4;
-    if (phase == "flatten")
+    if (phase == Phase::Flatten)
     {
       base = 0.4;
       share = 0.3;
     }
-    else if (phase != "unroll")
+    else if (phase != Phase::Unroll)
     {
       base = 0.7;
       share = 0.3;
     }
-    const double limit = phase.rfind("relax", 0) == 0 ? m_Parameters.RelaxationIterations : stepLimit;
+    const double limit =
+      phase == Phase::Relax || phase == Phase::RelaxFull ? m_Parameters.RelaxationIterations : stepLimit;
     this->UpdateProgress(static_cast<float>(base + share * std::min(1.0, step / limit)));
     return !this->GetAbortGenerateData();
   });
@@ -111,6 +113,10 @@ MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::GenerateData()
       output->SetPointData(id, static_cast<typename OutputMeshType::PixelType>(it.Value()));
     }
   }
+  // The whole mesh is there: without this a mesh output looks outside its requested region
+  // to the pipeline (itk::PointSet's buffered region stays -1), and every later update
+  // downstream would run this filter again.
+  output->SetBufferedRegion(output->GetRequestedRegion());
   this->UpdateProgress(1.0f);
 }
 

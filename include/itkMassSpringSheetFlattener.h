@@ -50,6 +50,15 @@ public:
     /** OuterEdge on a grid mesh (a rolled sheet's mid-surface), None on any other mesh. */
     Auto
   };
+  /** The phases of a flattening, in order; RelaxFull is the relaxation of the full mesh
+   * after a coarse-to-fine run. */
+  enum class Phase : uint8_t
+  {
+    Unroll,
+    Flatten,
+    Relax,
+    RelaxFull
+  };
 };
 /** Shorter name used throughout the module. */
 using SheetLockedEdgeEnum = MassSpringSheetFlattenerEnums::LockedEdge;
@@ -57,6 +66,10 @@ VirtualUnwrapping_EXPORT const char *
 ToString(SheetLockedEdgeEnum edge);
 VirtualUnwrapping_EXPORT SheetLockedEdgeEnum
 SheetLockedEdgeFromString(const std::string & name);
+using SheetFlatteningPhaseEnum = MassSpringSheetFlattenerEnums::Phase;
+/** "unroll", "flatten", "relax", "relax-full". */
+VirtualUnwrapping_EXPORT const char *
+ToString(SheetFlatteningPhaseEnum phase);
 
 /** The simulation's numeric parameters, one line each:
  *   X(type, Name, default, lowest, highest, "tool-option", "report_key", "meaning").
@@ -140,26 +153,26 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
 {
   struct Phase
   {
-    std::string Name;
-    std::string Integrator;
-    double      TimeStep{ 0.0 };
-    uint64_t    Steps{ 0 };
-    std::string StopReason; // "converged" or "step limit"
-    double      Seconds{ 0.0 };
-    double      RelativeKineticEnergy{ 0.0 };
-    double      RelativeResidualForce{ 0.0 };
+    SheetFlatteningPhaseEnum Name{ SheetFlatteningPhaseEnum::Unroll };
+    std::string              Integrator;
+    double                   TimeStep{ 0.0 };
+    uint64_t                 Steps{ 0 };
+    std::string              StopReason; // "converged" or "step limit"
+    double                   Seconds{ 0.0 };
+    double                   RelativeKineticEnergy{ 0.0 };
+    double                   RelativeResidualForce{ 0.0 };
   };
   std::vector<Phase> Phases;
   /** What the unroll phase held (Auto resolved). */
   SheetLockedEdgeEnum LockedEdge{ SheetLockedEdgeEnum::None };
-  size_t             Particles{ 0 };
-  size_t             SimulatedParticles{ 0 };
-  size_t             Springs{ 0 };
-  unsigned int       CoarseningFactor{ 1 };
-  double             Gravity{ 0.0 };
-  double             Damping{ 0.0 };
-  uint64_t           SpringEvaluations{ 0 };
-  double             Seconds{ 0.0 };
+  size_t              Particles{ 0 };
+  size_t              SimulatedParticles{ 0 };
+  size_t              Springs{ 0 };
+  unsigned int        CoarseningFactor{ 1 };
+  double              Gravity{ 0.0 };
+  double              Damping{ 0.0 };
+  uint64_t            SpringEvaluations{ 0 };
+  double              Seconds{ 0.0 };
 };
 
 /** \class MassSpringSheetFlattener
@@ -201,9 +214,9 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
 class VirtualUnwrapping_EXPORT MassSpringSheetFlattener
 {
 public:
-  /** Called after every step: the system, the phase name ("unroll", "flatten", "relax")
-   * and the step within the phase. Return false to abort. */
-  using StepCallback = std::function<bool(MassSpringSystem &, const std::string &, uint64_t)>;
+  /** Called after every step: the system, the phase and the step within the phase.
+   * Return false to abort. */
+  using StepCallback = std::function<bool(MassSpringSystem &, SheetFlatteningPhaseEnum, uint64_t)>;
 
   void
   SetParameters(const MassSpringFlatteningParameters & parameters)

@@ -46,6 +46,79 @@ using namespace detail;
 using CTReading::DescribeSeries;
 using CTReading::Refuse;
 using OutputImageType = CTVolumeReader::OutputImageType;
+
+// The index box that encloses the physical box between two corners (mm): each of its eight
+// corners mapped to a continuous index, the box clipped to the image (`clipped` set then);
+// refused when it does not overlap the image.
+CTVolumeReader::RegionType
+IndexBox(const OutputImageType *           image,
+         const CTVolumeReader::PointType & start,
+         const CTVolumeReader::PointType & end,
+         bool &                            clipped)
+{
+  const auto                 size = image->GetLargestPossibleRegion().GetSize();
+  ContinuousIndex<double, 3> low, high;
+  for (unsigned corner = 0; corner < 8; ++corner)
+  {
+    CTVolumeReader::PointType p;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      p[d] = (corner >> d) & 1 ? end[d] : start[d];
+    }
+    ContinuousIndex<double, 3> c;
+    image->TransformPhysicalPointToContinuousIndex(p, c);
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      low[d] = corner ? std::min(low[d], c[d]) : c[d];
+      high[d] = corner ? std::max(high[d], c[d]) : c[d];
+    }
+  }
+  CTVolumeReader::RegionType box;
+  clipped = false;
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    const double first = std::ceil(low[d] - 1e-6), last = std::floor(high[d] + 1e-6);
+    const double fullLast = static_cast<double>(size[d]) - 1.0;
+    if (last < 0.0 || first > fullLast || last < first)
+    {
+      Refuse("physical region of interest ", start, " - ", end, " mm does not overlap the volume (axis ", d, ")");
+    }
+    clipped = clipped || first < 0.0 || last > fullLast;
+    box.SetIndex(d, static_cast<IndexValueType>(std::max(first, 0.0)));
+    box.SetSize(d, static_cast<SizeValueType>(std::min(last, fullLast) - std::max(first, 0.0)) + 1);
+  }
+  return box;
+}
+
+// Appends the extraction of `region` to the reading pipeline. ExtractImageFilter passes a
+// downstream request for a few slices on upstream (RegionOfInterestImageFilter asks for the
+// whole box); the box is then re-indexed from 0 with its corner as origin.
+OutputImageType *
+AppendExtraction(OutputImageType *                     tail,
+                 const CTVolumeReader::RegionType &    region,
+                 std::vector<ProcessObject::Pointer> & pipeline)
+{
+  auto extract = ExtractImageFilter<OutputImageType, OutputImageType>::New();
+  extract->SetInput(tail);
+  extract->SetExtractionRegion(region);
+  extract->SetDirectionCollapseToSubmatrix();
+  CTVolumeReader::PointType corner;
+  tail->TransformIndexToPhysicalPoint(region.GetIndex(), corner);
+  auto reindex = ChangeInformationImageFilter<OutputImageType>::New();
+  reindex->SetInput(extract->GetOutput());
+  OutputImageType::OffsetType offset;
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    offset[d] = -region.GetIndex(d);
+  }
+  reindex->SetOutputOffset(offset);
+  reindex->ChangeRegionOn();
+  reindex->SetOutputOrigin(corner);
+  reindex->ChangeOriginOn();
+  pipeline.push_back(extract.GetPointer());
+  pipeline.push_back(reindex.GetPointer());
+  return reindex->GetOutput();
+}
 } // namespace
 
 void
@@ -254,43 +327,8 @@ CTVolumeReader::BuildPipeline()
   }
   else if (m_UsePhysicalRegionOfInterest)
   {
-    // The box between the two corners, mapped to continuous indices through its eight
-    // corners: for an oblique volume this is the index box that encloses it.
-    ContinuousIndex<double, 3> low, high;
-    for (unsigned corner = 0; corner < 8; ++corner)
-    {
-      PointType p;
-      for (unsigned d = 0; d < 3; ++d)
-      {
-        p[d] = (corner >> d) & 1 ? m_PhysicalRegionOfInterestEnd[d] : m_PhysicalRegionOfInterestStart[d];
-      }
-      ContinuousIndex<double, 3> c;
-      tail->TransformPhysicalPointToContinuousIndex(p, c);
-      for (unsigned d = 0; d < 3; ++d)
-      {
-        low[d] = corner ? std::min(low[d], c[d]) : c[d];
-        high[d] = corner ? std::max(high[d], c[d]) : c[d];
-      }
-    }
     bool clipped = false;
-    for (unsigned d = 0; d < 3; ++d)
-    {
-      const double first = std::ceil(low[d] - 1e-6), last = std::floor(high[d] + 1e-6);
-      const double fullLast = static_cast<double>(m_FullSize[d]) - 1.0;
-      if (last < 0.0 || first > fullLast || last < first)
-      {
-        Refuse("physical region of interest ",
-               m_PhysicalRegionOfInterestStart,
-               " - ",
-               m_PhysicalRegionOfInterestEnd,
-               " mm does not overlap the volume (axis ",
-               d,
-               ")");
-      }
-      clipped = clipped || first < 0.0 || last > fullLast;
-      roi.SetIndex(d, static_cast<IndexValueType>(std::max(first, 0.0)));
-      roi.SetSize(d, static_cast<SizeValueType>(std::min(last, fullLast) - std::max(first, 0.0)) + 1);
-    }
+    roi = IndexBox(tail, m_PhysicalRegionOfInterestStart, m_PhysicalRegionOfInterestEnd, clipped);
     if (clipped)
     {
       m_Warnings.push_back("physical region of interest clipped to the volume");
@@ -314,29 +352,7 @@ CTVolumeReader::BuildPipeline()
   }
   if (m_UseRegionOfInterest || m_UsePhysicalRegionOfInterest)
   {
-    // ExtractImageFilter passes a downstream request for a few slices on upstream
-    // (RegionOfInterestImageFilter asks for the whole box); the box is then re-indexed
-    // from 0 with its corner as origin.
-    auto extract = ExtractImageFilter<OutputImageType, OutputImageType>::New();
-    extract->SetInput(tail);
-    extract->SetExtractionRegion(roi);
-    extract->SetDirectionCollapseToSubmatrix();
-    PointType corner;
-    tail->TransformIndexToPhysicalPoint(roi.GetIndex(), corner);
-    auto reindex = ChangeInformationImageFilter<OutputImageType>::New();
-    reindex->SetInput(extract->GetOutput());
-    OutputImageType::OffsetType offset;
-    for (unsigned d = 0; d < 3; ++d)
-    {
-      offset[d] = -roi.GetIndex(d);
-    }
-    reindex->SetOutputOffset(offset);
-    reindex->ChangeRegionOn();
-    reindex->SetOutputOrigin(corner);
-    reindex->ChangeOriginOn();
-    tail = reindex->GetOutput();
-    m_Pipeline.push_back(extract.GetPointer());
-    m_Pipeline.push_back(reindex.GetPointer());
+    tail = AppendExtraction(tail, roi, m_Pipeline);
   }
 
   if (m_ShrinkFactor > 1)

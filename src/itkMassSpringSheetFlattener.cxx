@@ -50,6 +50,23 @@ ToString(SheetLockedEdgeEnum edge)
   return "unknown";
 }
 
+const char *
+ToString(SheetFlatteningPhaseEnum phase)
+{
+  switch (phase)
+  {
+    case SheetFlatteningPhaseEnum::Unroll:
+      return "unroll";
+    case SheetFlatteningPhaseEnum::Flatten:
+      return "flatten";
+    case SheetFlatteningPhaseEnum::Relax:
+      return "relax";
+    case SheetFlatteningPhaseEnum::RelaxFull:
+      return "relax-full";
+  }
+  return "unknown";
+}
+
 SheetLockedEdgeEnum
 SheetLockedEdgeFromString(const std::string & name)
 {
@@ -249,7 +266,7 @@ namespace {
 // Runs one phase until converged or at the step limit; records it in the report.
 MassSpringFlatteningReport::Phase
 RunPhase(MassSpringSystem &                             system,
-         const std::string &                            name,
+         SheetFlatteningPhaseEnum                       name,
          const MassSpringFlatteningParameters &         parameters,
          const MassSpringSheetFlattener::StepCallback & callback,
          const std::function<bool()> &                  settled = {})
@@ -271,7 +288,8 @@ RunPhase(MassSpringSystem &                             system,
     phase.Steps = step;
     if (callback && !callback(system, name, step))
     {
-      itkGenericExceptionMacro(<< "mass-spring flattening aborted during the " << name << " phase at step " << step);
+      itkGenericExceptionMacro(<< "mass-spring flattening aborted during the " << ToString(name) << " phase at step "
+                               << step);
     }
     if (step % checkEvery == 0)
     {
@@ -297,11 +315,12 @@ RunPhase(MassSpringSystem &                             system,
 // Quasi-static relaxation on the plane z = 0 until the residual force is small.
 MassSpringFlatteningReport::Phase
 RunRelaxation(MassSpringSystem &                             system,
+              SheetFlatteningPhaseEnum                       name,
               const MassSpringFlatteningParameters &         parameters,
               const MassSpringSheetFlattener::StepCallback & callback)
 {
   MassSpringFlatteningReport::Phase phase;
-  phase.Name = "relax";
+  phase.Name = name;
   phase.Integrator = "quasi-static";
   phase.StopReason = "step limit";
   const auto start = Clock::now();
@@ -317,9 +336,9 @@ RunRelaxation(MassSpringSystem &                             system,
   {
     system.Relax(batch);
     phase.Steps = done + batch;
-    if (callback && !callback(system, "relax", phase.Steps))
+    if (callback && !callback(system, name, phase.Steps))
     {
-      itkGenericExceptionMacro(<< "mass-spring flattening aborted during the relax phase");
+      itkGenericExceptionMacro(<< "mass-spring flattening aborted during the " << ToString(name) << " phase");
     }
     phase.RelativeResidualForce = system.ComputeRelativeResidualForce();
     if (phase.RelativeResidualForce < parameters.RelaxationTolerance)
@@ -470,21 +489,16 @@ EdgeParticles(const SheetMesh & mesh, SheetLockedEdgeEnum edge)
   return endIsOuter ? starts : ends;
 }
 
-} // namespace
 
-SheetMesh
-MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
+// The parameters as run: the automatic locked edge resolved for this mesh, every numeric
+// parameter checked against its range (a NaN in none).
+MassSpringFlatteningParameters
+ResolvedParameters(MassSpringFlatteningParameters p, const SheetMesh & surface)
 {
-  const auto start = Clock::now();
-  surface.Validate("mass-spring flattening input");
-  m_Report = MassSpringFlatteningReport();
-  MassSpringFlatteningParameters p = m_Parameters;
   if (p.LockedEdge == SheetLockedEdgeEnum::Auto)
   {
     p.LockedEdge = surface.IsGridStructured() ? SheetLockedEdgeEnum::OuterEdge : SheetLockedEdgeEnum::None;
   }
-  m_Report.LockedEdge = p.LockedEdge;
-  // Every numeric parameter within its range (a NaN in none).
 #define VU_MASS_SPRING_CHECK_RANGE(type, name, value, lowest, highest, option, key, meaning)                           \
   if (!(static_cast<double>(p.name) >= static_cast<double>(lowest) &&                                                  \
         static_cast<double>(p.name) <= static_cast<double>(highest)))                                                  \
@@ -495,29 +509,18 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   }
   VU_MASS_SPRING_PARAMETERS(VU_MASS_SPRING_CHECK_RANGE)
 #undef VU_MASS_SPRING_CHECK_RANGE
-  const size_t n = surface.GetNumberOfPoints();
-  m_Report.Particles = n;
+  return p;
+}
 
-  // The level that is simulated: the full mesh or a coarser grid.
-  unsigned int factor = 1;
-  if (surface.IsGridStructured())
-  {
-    factor =
-      p.CoarseningFactor > 0
-        ? p.CoarseningFactor
-        : std::max(1u, static_cast<unsigned int>(std::ceil(std::sqrt(double(n) / std::max(1u, p.CoarseParticles)))));
-  }
-  std::vector<uint32_t> fineIds;
-  SheetMesh             simulated = factor > 1 ? CoarseToFine::CoarseGrid(surface, factor, fineIds) : surface;
-  if (factor > 1 && simulated.GetNumberOfTriangles() == 0)
-  {
-    factor = 1;
-    simulated = surface;
-  }
-  m_Report.CoarseningFactor = factor;
-  m_Report.SimulatedParticles = simulated.GetNumberOfPoints();
-
-  // Held particles, in the simulated level's numbering.
+// The particles the unroll phase holds, numbered in the simulated level (`fineIds`: each
+// simulated particle's id in the full mesh of `n` points, when `factor` > 1).
+std::vector<uint32_t>
+HeldParticles(const MassSpringFlatteningParameters & p,
+              const SheetMesh &                      simulated,
+              size_t                                 n,
+              unsigned int                           factor,
+              const std::vector<uint32_t> &          fineIds)
+{
   std::vector<uint32_t> locked;
   if (p.LockedEdge == SheetLockedEdgeEnum::Custom)
   {
@@ -550,6 +553,109 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   {
     locked = EdgeParticles(simulated, p.LockedEdge);
   }
+  return locked;
+}
+
+// Unroll: gravity across the held edge, from it towards the sheet's centroid (a unit vector).
+Vec3
+HangingDirection(const MassSpringSystem & system, const std::vector<uint32_t> & locked, double extent)
+{
+  Vec3 heldCentroid = Vec3::Zero(), centroid = Vec3::Zero();
+  for (uint32_t id : locked)
+  {
+    heldCentroid += PointOf(system.GetPositions(), id);
+  }
+  heldCentroid /= static_cast<double>(locked.size());
+  for (size_t i = 0; i < system.GetNumberOfParticles(); ++i)
+  {
+    centroid += PointOf(system.GetPositions(), i);
+  }
+  centroid /= static_cast<double>(system.GetNumberOfParticles());
+  std::vector<double> heldPositions;
+  for (uint32_t id : locked)
+  {
+    const Vec3 x = PointOf(system.GetPositions(), id);
+    heldPositions.insert(heldPositions.end(), { x.x(), x.y(), x.z() });
+  }
+  Vec3       heldMean;
+  const Vec3 axis = locked.size() > 1 ? Vec3(PrincipalAxes(heldPositions, heldMean).col(0)) : Vec3::UnitZ();
+  Vec3       down = centroid - heldCentroid;
+  down -= down.dot(axis) * axis;
+  if (down.norm() < 1e-9 * extent)
+  {
+    down = axis.unitOrthogonal();
+  }
+  return down.normalized();
+}
+
+// Unrolled: hanging in a plane. A sheet creeping out of its curl can be slow enough to pass
+// for resting, so planarity is part of convergence: close to its plane on the whole
+// (`tolerance` of the mean spring length, root mean square), and no triangle seen from the
+// plane's normal turned over. A small curl left at the free end (the inner turns of a long
+// roll) passes the first and would fold over when the sheet is dropped onto the plane; it
+// fails the second.
+bool
+HangsFlat(const MassSpringSystem & system, const SheetMesh & simulated, double tolerance)
+{
+  Vec3                  centroid;
+  const Eigen::Matrix3d axes = PrincipalAxes(system.GetPositions(), centroid);
+  const auto &          x = system.GetPositions();
+  double                sum = 0.0;
+  for (size_t i = 0; i < system.GetNumberOfParticles(); ++i)
+  {
+    const double d = (PointOf(x, i) - centroid).dot(axes.col(2));
+    sum += d * d;
+  }
+  if (std::sqrt(sum / system.GetNumberOfParticles()) >= tolerance * system.GetMeanRestLength())
+  {
+    return false;
+  }
+  size_t positive = 0, negative = 0;
+  for (size_t t = 0; t < simulated.GetNumberOfTriangles(); ++t)
+  {
+    const uint32_t * tri = &simulated.Triangles[3 * t];
+    const Vec3       e1 = PointOf(x, tri[1]) - PointOf(x, tri[0]);
+    const Vec3       e2 = PointOf(x, tri[2]) - PointOf(x, tri[0]);
+    const double     side = e1.cross(e2).dot(axes.col(2));
+    positive += side > 0.0 ? 1 : 0;
+    negative += side < 0.0 ? 1 : 0;
+  }
+  return std::min(positive, negative) == 0;
+}
+} // namespace
+
+SheetMesh
+MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
+{
+  const auto start = Clock::now();
+  surface.Validate("mass-spring flattening input");
+  m_Report = MassSpringFlatteningReport();
+  const MassSpringFlatteningParameters p = ResolvedParameters(m_Parameters, surface);
+  m_Report.LockedEdge = p.LockedEdge;
+  const size_t n = surface.GetNumberOfPoints();
+  m_Report.Particles = n;
+
+  // The level that is simulated: the full mesh or a coarser grid.
+  unsigned int factor = 1;
+  if (surface.IsGridStructured())
+  {
+    factor =
+      p.CoarseningFactor > 0
+        ? p.CoarseningFactor
+        : std::max(1u, static_cast<unsigned int>(std::ceil(std::sqrt(double(n) / std::max(1u, p.CoarseParticles)))));
+  }
+  std::vector<uint32_t> fineIds;
+  SheetMesh             simulated = factor > 1 ? CoarseToFine::CoarseGrid(surface, factor, fineIds) : surface;
+  if (factor > 1 && simulated.GetNumberOfTriangles() == 0)
+  {
+    factor = 1;
+    simulated = surface;
+  }
+  m_Report.CoarseningFactor = factor;
+  m_Report.SimulatedParticles = simulated.GetNumberOfPoints();
+
+  // Held particles, in the simulated level's numbering.
+  const std::vector<uint32_t> locked = HeldParticles(p, simulated, n, factor, fineIds);
 
   MassSpringSystem system;
   BuildSystem(simulated, p, system);
@@ -594,65 +700,10 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   if (!locked.empty())
   {
     system.SetLockedParticles(locked);
-    Vec3 heldCentroid = Vec3::Zero(), centroid = Vec3::Zero();
-    for (uint32_t id : locked)
-    {
-      heldCentroid += PointOf(system.GetPositions(), id);
-    }
-    heldCentroid /= static_cast<double>(locked.size());
-    for (size_t i = 0; i < system.GetNumberOfParticles(); ++i)
-    {
-      centroid += PointOf(system.GetPositions(), i);
-    }
-    centroid /= static_cast<double>(system.GetNumberOfParticles());
-    std::vector<double> heldPositions;
-    for (uint32_t id : locked)
-    {
-      const Vec3 x = PointOf(system.GetPositions(), id);
-      heldPositions.insert(heldPositions.end(), { x.x(), x.y(), x.z() });
-    }
-    Vec3       heldMean;
-    const Vec3 axis = locked.size() > 1 ? Vec3(PrincipalAxes(heldPositions, heldMean).col(0)) : Vec3::UnitZ();
-    Vec3       down = centroid - heldCentroid;
-    down -= down.dot(axis) * axis;
-    if (down.norm() < 1e-9 * extent)
-    {
-      down = axis.unitOrthogonal();
-    }
-    down.normalize();
+    const Vec3 down = HangingDirection(system, locked, extent);
     system.SetGravity({ gravity * down.x(), gravity * down.y(), gravity * down.z() });
-    // Unrolled: hanging in a plane. A sheet creeping out of its curl can be slow enough to
-    // pass for resting, so planarity is part of convergence: close to its plane on the
-    // whole, and no triangle seen from the plane's normal turned over. A small curl left at
-    // the free end (the inner turns of a long roll) passes the first and would fold over
-    // when the sheet is dropped onto the plane; it fails the second.
-    auto planar = [&system, &p, &simulated]() {
-      Vec3                  centroid;
-      const Eigen::Matrix3d axes = PrincipalAxes(system.GetPositions(), centroid);
-      const auto &          x = system.GetPositions();
-      double                sum = 0.0;
-      for (size_t i = 0; i < system.GetNumberOfParticles(); ++i)
-      {
-        const double d = (PointOf(x, i) - centroid).dot(axes.col(2));
-        sum += d * d;
-      }
-      if (std::sqrt(sum / system.GetNumberOfParticles()) >= p.PlanarityTolerance * system.GetMeanRestLength())
-      {
-        return false;
-      }
-      size_t positive = 0, negative = 0;
-      for (size_t t = 0; t < simulated.GetNumberOfTriangles(); ++t)
-      {
-        const uint32_t * tri = &simulated.Triangles[3 * t];
-        const Vec3       e1 = PointOf(x, tri[1]) - PointOf(x, tri[0]);
-        const Vec3       e2 = PointOf(x, tri[2]) - PointOf(x, tri[0]);
-        const double     side = e1.cross(e2).dot(axes.col(2));
-        positive += side > 0.0 ? 1 : 0;
-        negative += side < 0.0 ? 1 : 0;
-      }
-      return std::min(positive, negative) == 0;
-    };
-    m_Report.Phases.push_back(RunPhase(system, "unroll", p, m_Callback, planar));
+    auto planar = [&system, &p, &simulated]() { return HangsFlat(system, simulated, p.PlanarityTolerance); };
+    m_Report.Phases.push_back(RunPhase(system, SheetFlatteningPhaseEnum::Unroll, p, m_Callback, planar));
   }
 
   // 2. Flatten: a plane under the sheet, gravity towards it, nothing held.
@@ -670,12 +721,12 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
     system.SetCollisionPlane(
       { planePoint.x(), planePoint.y(), planePoint.z() }, { normal.x(), normal.y(), normal.z() }, p.Restitution);
     system.SetGravity({ -gravity * normal.x(), -gravity * normal.y(), -gravity * normal.z() });
-    m_Report.Phases.push_back(RunPhase(system, "flatten", p, m_Callback));
+    m_Report.Phases.push_back(RunPhase(system, SheetFlatteningPhaseEnum::Flatten, p, m_Callback));
 
     // 3. Relax on the plane, expressed in its own coordinates.
     system.SetPositions(ToPlane(system.GetPositions(), planePoint, axes.col(0), axes.col(1)));
     system.SetVelocities(std::vector<double>(3 * system.GetNumberOfParticles(), 0.0));
-    m_Report.Phases.push_back(RunRelaxation(system, p, m_Callback));
+    m_Report.Phases.push_back(RunRelaxation(system, SheetFlatteningPhaseEnum::Relax, p, m_Callback));
   }
   m_Report.SpringEvaluations += system.GetNumberOfForceEvaluations() * system.GetNumberOfSprings();
 
@@ -692,8 +743,7 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
     BuildSystem(surface, p, fine);
     fine.SetPositions(prolonged);
     m_Report.Springs = fine.GetNumberOfSprings();
-    m_Report.Phases.push_back(RunRelaxation(fine, p, m_Callback));
-    m_Report.Phases.back().Name = "relax-full";
+    m_Report.Phases.push_back(RunRelaxation(fine, SheetFlatteningPhaseEnum::RelaxFull, p, m_Callback));
     m_Report.SpringEvaluations += fine.GetNumberOfForceEvaluations() * fine.GetNumberOfSprings();
     flat.Points = fine.GetPositions();
   }

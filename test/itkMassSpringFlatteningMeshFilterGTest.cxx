@@ -123,7 +123,13 @@ TEST(MassSpringFlatteningMeshFilter, FlattensARollWithEventsAndCarriesPointData)
   EXPECT_LE(calculator->GetEdgeStrainP95(), 0.005);
   EXPECT_EQ(calculator->GetNumberOfFlippedTriangles(), 0u);
   ASSERT_FALSE(filter->GetReport().Phases.empty());
-  EXPECT_EQ(filter->GetReport().Phases.front().Name, "unroll");
+  EXPECT_EQ(filter->GetReport().Phases.front().Name, itk::SheetFlatteningPhaseEnum::Unroll);
+
+  // Up to date after its update: a downstream filter's update does not run it again.
+  const auto before = iterations;
+  output->Update();
+  filter->Update();
+  EXPECT_EQ(iterations, before);
 }
 
 TEST(MassSpringFlatteningMeshFilter, WorksOnQuadEdgeMeshes)

@@ -43,8 +43,8 @@ PrintReport(const itk::MassSpringSheetFlattener & flattener, const itk::Flatteni
             << report.Springs << " factor " << report.CoarseningFactor << " seconds " << report.Seconds << std::endl;
   for (const auto & phase : report.Phases)
   {
-    std::cout << "  " << phase.Name << " " << phase.Integrator << " h=" << phase.TimeStep << " steps " << phase.Steps
-              << " " << phase.StopReason << " KE " << phase.RelativeKineticEnergy << " F "
+    std::cout << "  " << itk::ToString(phase.Name) << " " << phase.Integrator << " h=" << phase.TimeStep << " steps "
+              << phase.Steps << " " << phase.StopReason << " KE " << phase.RelativeKineticEnergy << " F "
               << phase.RelativeResidualForce << " " << phase.Seconds << " s" << std::endl;
   }
   std::cout << "  strain p95 " << c->GetEdgeStrainP95() << " max " << c->GetEdgeStrainMax() << " area "
@@ -175,17 +175,24 @@ TEST(MassSpringSheetFlattener, ExplicitStepAboveTheBoundIsReportedAsDivergence)
 
 TEST(MassSpringSheetFlattener, CallbackSeesEveryPhaseAndCanAbort)
 {
-  const itk::SheetMesh          surface = vu::SpiralRollMesh(10.0, 4.0, 1.0, 4.0, 12.0, nullptr);
-  itk::MassSpringSheetFlattener flattener;
-  std::set<std::string>         phases;
-  flattener.SetStepCallback([&](itk::MassSpringSystem & system, const std::string & phase, uint64_t) {
+  const itk::SheetMesh                    surface = vu::SpiralRollMesh(10.0, 4.0, 1.0, 4.0, 12.0, nullptr);
+  itk::MassSpringSheetFlattener           flattener;
+  std::set<itk::SheetFlatteningPhaseEnum> phases;
+  flattener.SetStepCallback([&](itk::MassSpringSystem & system, itk::SheetFlatteningPhaseEnum phase, uint64_t) {
     phases.insert(phase);
     EXPECT_EQ(system.GetNumberOfParticles(), surface.GetNumberOfPoints());
     return true;
   });
   flattener.Flatten(surface);
-  EXPECT_EQ(phases, (std::set<std::string>{ "unroll", "flatten", "relax" }));
-  flattener.SetStepCallback([](itk::MassSpringSystem &, const std::string &, uint64_t step) { return step < 5; });
+  using Phase = itk::SheetFlatteningPhaseEnum;
+  EXPECT_EQ(phases, (std::set<Phase>{ Phase::Unroll, Phase::Flatten, Phase::Relax }));
+  // The callback and the report name the same phases.
+  for (const auto & phase : flattener.GetReport().Phases)
+  {
+    EXPECT_EQ(phases.count(phase.Name), 1u) << itk::ToString(phase.Name);
+  }
+  EXPECT_STREQ(itk::ToString(Phase::RelaxFull), "relax-full");
+  flattener.SetStepCallback([](itk::MassSpringSystem &, Phase, uint64_t step) { return step < 5; });
   EXPECT_THROW(flattener.Flatten(surface), itk::ExceptionObject);
 }
 

@@ -764,7 +764,7 @@ RunUnwrap(UnwrapOptions & options)
   flattening->SetInput(surfaceFilter->GetOutput());
   flattening->SetParameters(ResolveSimulationParameters(options.Simulation, results.Surface));
   flattening->AddObserver(itk::IterationEvent(), [&progress, &flattening](const itk::EventObject &) {
-    progress.Tick(flattening->GetCurrentPhase(), flattening->GetCurrentStep());
+    progress.Tick(itk::ToString(flattening->GetCurrentPhase()), flattening->GetCurrentStep());
   });
   flattening->Update();
   results.Flat = itk::MeshToSheetMesh(flattening->GetOutput());

@@ -144,7 +144,7 @@ ToJson(const itk::MassSpringFlatteningReport & report)
   nlohmann::json phases = nlohmann::json::array();
   for (const auto & phase : report.Phases)
   {
-    phases.push_back({ { "name", phase.Name },
+    phases.push_back({ { "name", itk::ToString(phase.Name) },
                        { "integrator", phase.Integrator },
                        { "time_step", phase.TimeStep },
                        { "steps", phase.Steps },
