@@ -83,7 +83,7 @@ MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::GenerateData()
   catch (const MassSpringDivergenceError & e)
   {
     m_CurrentSystem = nullptr;
-    itkExceptionMacro(<< e.what());
+    itkExceptionMacro(<< e.GetDescription());
   }
   catch (...)
   {

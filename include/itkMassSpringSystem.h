@@ -19,6 +19,7 @@
 #define itkMassSpringSystem_h
 
 #include "VirtualUnwrappingExport.h"
+#include "itkMacro.h"
 
 #include <array>
 #include <cstdint>
@@ -58,17 +59,30 @@ using MassSpringIntegratorEnum = MassSpringSystemEnums::Integrator;
 /** Name of an integrator as the tool and the reports spell it. */
 VirtualUnwrapping_EXPORT const char *
 ToString(MassSpringIntegratorEnum integrator);
-/** Inverse of ToString; throws std::invalid_argument for an unknown name. */
+/** Inverse of ToString; throws itk::ExceptionObject for an unknown name. */
 VirtualUnwrapping_EXPORT MassSpringIntegratorEnum
 MassSpringIntegratorFromString(const std::string & name);
 
 /** Thrown when a run diverges: non-finite state, energy growth beyond the bound, or springs
  * stretched beyond any physical state. The message names the integrator, the step and the
  * time step. */
-class VirtualUnwrapping_EXPORT MassSpringDivergenceError : public std::runtime_error
+class VirtualUnwrapping_EXPORT MassSpringDivergenceError : public ExceptionObject
 {
 public:
-  using std::runtime_error::runtime_error;
+  /** The message is the description (what() is the description alone, one line). */
+  explicit MassSpringDivergenceError(const std::string & message)
+    : ExceptionObject(__FILE__, __LINE__, message, "MassSpringSystem")
+  {}
+  const char *
+  what() const noexcept override
+  {
+    return this->GetDescription();
+  }
+  const char *
+  GetNameOfClass() const override
+  {
+    return "MassSpringDivergenceError";
+  }
 };
 
 /** \class MassSpringSystem

@@ -81,7 +81,7 @@ SheetLockedEdgeFromString(const std::string & name)
       return e;
     }
   }
-  throw std::invalid_argument("unknown locked edge '" + name + "' (none, outer, inner, custom, auto)");
+  itkGenericExceptionMacro(<< "unknown locked edge '" << name << "' (none, outer, inner, custom, auto)");
 }
 
 namespace {

@@ -64,8 +64,8 @@ MassSpringIntegratorFromString(const std::string & name)
       return e;
     }
   }
-  throw std::invalid_argument("unknown integrator '" + name +
-                              "' (euler, midpoint, rk4, symplectic-euler, implicit-euler)");
+  itkGenericExceptionMacro(<< "unknown integrator '" << name
+                           << "' (euler, midpoint, rk4, symplectic-euler, implicit-euler)");
 }
 
 MassSpringSystem::MassSpringSystem()

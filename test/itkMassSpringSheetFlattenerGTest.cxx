@@ -237,6 +237,6 @@ TEST(MassSpringSheetFlattener, RejectsBadInput)
   parameters.Restitution = 2.0;
   flattener.SetParameters(parameters);
   EXPECT_THROW(flattener.Flatten(triangle), itk::ExceptionObject);
-  EXPECT_THROW(itk::SheetLockedEdgeFromString("middle"), std::invalid_argument);
+  EXPECT_THROW(itk::SheetLockedEdgeFromString("middle"), itk::ExceptionObject);
   EXPECT_EQ(itk::SheetLockedEdgeFromString("outer"), itk::SheetLockedEdgeEnum::OuterEdge);
 }

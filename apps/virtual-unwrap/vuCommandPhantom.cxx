@@ -102,10 +102,12 @@ Vector3(const double * v)
   return { v[0], v[1], v[2] };
 }
 
-void
-RunPhantom(const PhantomOptions & options)
+using Source = itk::SheetPhantomSource;
+
+// The phantom source: the preset with the options given over it, every option checked.
+Source::Pointer
+ConfiguredSource(const PhantomOptions & options)
 {
-  using Source = itk::SheetPhantomSource;
   auto source = Source::New();
   try
   {
@@ -247,6 +249,178 @@ RunPhantom(const PhantomOptions & options)
     throw UsageError("--mesh-spacing must be positive");
   }
 
+  return source;
+}
+
+// A hospital CT series: each slice's distance from the first along z (a slice spacing
+// that changes, slices left out).
+std::vector<double>
+HospitalSliceLocations(const PhantomOptions & options, const Source::OutputImageType * volume)
+{
+  const auto          has = [&](const char * name) { return options.Values.count(name) > 0; };
+  const auto          value = [&](const char * name) { return options.Values.at(name); };
+  std::vector<double> sliceLocations;
+  {
+    const auto   volumeSize = volume->GetLargestPossibleRegion().GetSize();
+    const double sliceSpacing = volume->GetSpacing()[2];
+    const double extent = sliceSpacing * static_cast<double>(volumeSize[2] - 1);
+    if (has("second-slice-spacing"))
+    {
+      sliceLocations =
+        itk::CTVolumeWriter::SliceLocationsWithSpacingChange(extent, sliceSpacing, value("second-slice-spacing"));
+    }
+    else
+    {
+      for (size_t k = 0; k < volumeSize[2]; ++k)
+      {
+        sliceLocations.push_back(static_cast<double>(k) * sliceSpacing);
+      }
+    }
+    std::vector<unsigned> drop = options.DropSlices;
+    std::sort(drop.begin(), drop.end());
+    drop.erase(std::unique(drop.begin(), drop.end()), drop.end());
+    for (auto k = drop.rbegin(); k != drop.rend(); ++k)
+    {
+      if (*k == 0 || *k + 1 >= sliceLocations.size())
+      {
+        throw UsageError("--drop-slices: slice " + std::to_string(*k) +
+                         " is not between the first and the last (0 and " + std::to_string(sliceLocations.size() - 1) +
+                         ")");
+      }
+      sliceLocations.erase(sliceLocations.begin() + *k);
+    }
+  }
+  return sliceLocations;
+}
+
+// ground_truth.json but for the timings: the phantom's parameters, the volume's geometry
+// and how sheet coordinates map into it.
+nlohmann::json
+GroundTruthJson(const PhantomOptions &      options,
+                const Source &              source,
+                const std::string &         volumeName,
+                const itk::CTVolumeWriter & writer,
+                const std::vector<double> & sliceLocations,
+                const itk::SheetMesh &      surface,
+                double                      meshSpacing)
+{
+  const itk::SheetPhantomGeometry & geometry = source.GetGeometry();
+  const Source::OutputImageType *   volume = source.GetOutput();
+  const auto                        format = writer.GetFormat();
+  const bool                        hospital = !sliceLocations.empty();
+  const auto                        size = volume->GetLargestPossibleRegion().GetSize();
+  const auto                        spacing = volume->GetSpacing();
+  const auto                        origin = volume->GetOrigin();
+  const auto *                      ink = geometry.GetInkImage();
+  const auto                        inkSize = ink->GetLargestPossibleRegion().GetSize();
+  nlohmann::json                    direction = nlohmann::json::array();
+  for (unsigned r = 0; r < 3; ++r)
+  {
+    direction.push_back({ volume->GetDirection()[r][0], volume->GetDirection()[r][1], volume->GetDirection()[r][2] });
+  }
+  const auto &      p = geometry.GetParameters();
+  const bool        rolled = p.Shape == itk::SheetPhantomGeometry::ShapeType::Rolled;
+  nlohmann::json    json;
+  const std::string stored =
+    format == itk::CTVolumeWriter::FormatType::Dicom
+      ? "int16 stored values, HU = stored * RescaleSlope (1) + RescaleIntercept (-1024)"
+    : format == itk::CTVolumeWriter::FormatType::Tiff
+      ? "uint16, HU = value - 1024 (HU below -1024 clipped); TIFF has no 3D geometry: use spacing_mm and origin_mm"
+      : "int16 HU";
+  json["text"] = geometry.GetText();
+  json["preset"] = options.Preset;
+  json["preset_description"] = Source::GetPresetDescription(options.Preset);
+  json["sheet"] = { { "shape", itk::SheetPhantomGeometry::ShapeName(p.Shape) },
+                    { "length_mm", p.SheetLength },
+                    { "width_mm", p.SheetWidth },
+                    { "thickness_mm", p.SheetThickness },
+                    { "tilt_deg", p.TiltAngle },
+                    { "minimum_curvature_radius_mm", geometry.GetMinimumCurvatureRadius() } };
+  if (rolled)
+  {
+    json["sheet"]["turns"] = geometry.GetNumberOfTurns();
+    json["sheet"]["inner_radius_mm"] = p.InnerRadius;
+    json["sheet"]["pitch_mm"] = p.Pitch;
+    json["sheet"]["gap_mm"] = p.Pitch - p.SheetThickness;
+    json["sheet"]["squash"] = p.Squash;
+    json["sheet"]["wave_amplitude_mm"] = p.WaveAmplitude;
+    json["sheet"]["waves_per_turn"] = p.WavesPerTurn;
+  }
+  else
+  {
+    json["sheet"]["fold_count"] = p.FoldCount;
+    json["sheet"]["fold_radius_mm"] = p.FoldRadius;
+    json["sheet"]["fold_opening_deg"] = p.FoldOpeningAngle;
+  }
+  json["ink"] = { { "source", options.InkImage.empty() ? "text" : "image" },
+                  { "image_file", options.InkImage },
+                  { "font", source.GetFontFile() },
+                  { "glyph_height_mm", source.GetGlyphHeight() },
+                  { "contrast_hu", source.GetInkContrast() },
+                  { "depth_mm", source.GetInkDepth() },
+                  { "face", "the face SurfaceNormal points out of (rolled: the inner, concave face)" },
+                  { "image_size", { inkSize[0], inkSize[1] } },
+                  { "image_spacing_mm", { ink->GetSpacing()[0], ink->GetSpacing()[1] } } };
+  json["material"] = { { "air_hu", source.GetAirValue() },
+                       { "sheet_hu", source.GetSheetValue() },
+                       { "fibre_contrast_hu", source.GetFibreContrast() },
+                       { "fibre_length_mm", source.GetFibreLength() } };
+  json["scan"] = { { "voxel_size_mm", source.GetVoxelSize() },
+                   { "slice_spacing_mm", source.GetSliceSpacing() },
+                   { "margin_mm", source.GetMargin() },
+                   { "supersampling", source.GetSupersampling() },
+                   { "ink_oversampling", source.GetInkOversampling() },
+                   { "blur_fwhm_mm", source.GetBlurFWHM() },
+                   { "noise_sd_hu", source.GetNoiseStandardDeviation() },
+                   { "seed", source.GetSeed() } };
+  json["volume"] = { { "format", options.Format },
+                     { "path", volumeName },
+                     { "size", { size[0], size[1], size[2] } },
+                     { "voxels", size[0] * size[1] * size[2] },
+                     { "spacing_mm", Vector3(spacing.GetDataPointer()) },
+                     { "origin_mm", Vector3(origin.GetDataPointer()) },
+                     { "direction", direction },
+                     { "values", stored } };
+  if (hospital)
+  {
+    json["series"] = { { "description",
+                         "the DICOM series is sampled from the volume above (cubic B-spline) on tilted or relocated "
+                         "slices: slice k lies at slice_locations_mm[k] along the volume's z axis from its first "
+                         "slice, its origin moved along y by -tan(gantry_tilt_deg) times that distance (then the "
+                         "slices are widened to hold the whole volume)" },
+                       { "gantry_tilt_deg", writer.GetGantryTilt() },
+                       { "slice_locations_mm", sliceLocations },
+                       { "dropped_slices", options.DropSlices } };
+  }
+  json["mapping"] = {
+    { "description",
+      "Sheet coordinates: s = arc length from the inner end (0..length_mm), w = across the sheet along the roll "
+      "axis (0..width_mm). Mid-surface point P(s, w) = R_x(tilt_deg) * (C(s), w - width_mm / 2) in the volume's "
+      "physical frame (mm), where C is the cross-section curve (rolled: Archimedean spiral r = inner_radius + "
+      "pitch * theta / 2pi + wave_amplitude * sin(waves_per_turn * theta), x = r cos theta, y = squash * r sin "
+      "theta, counter-clockwise from the inner end; folded: flat panels joined by creases of fold_radius_mm turning "
+      "alternately left and right by 180 - fold_opening_deg degrees). Ink normal n = dP/dw x dP/ds." },
+    { "surface_obj", "ground_truth_surface.obj" },
+    { "flat_obj", "ground_truth_flat.obj" },
+    { "mesh_spacing_mm", meshSpacing },
+    { "grid_rows", surface.GridRows },
+    { "grid_columns", surface.GridColumns },
+    { "vertex_order",
+      "vertex r * grid_columns + c (1-based in OBJ: +1) lies at s = c * length_mm / (grid_columns - 1), "
+      "w = r * width_mm / (grid_rows - 1); the flat OBJ has the same faces with vertices (s, w, 0)" },
+    { "faces", "oriented so that right-hand normals of the surface OBJ point out of the inked face" },
+    { "ink_png",
+      "ground_truth_ink.png: 8-bit, 255 = full ink coverage; column = s / image_spacing_mm[0] - 0.5, row = w / "
+      "image_spacing_mm[1] - 0.5; text upright and unmirrored when shown with row 0 at the top" }
+  };
+  return json;
+}
+
+void
+RunPhantom(const PhantomOptions & options)
+{
+  const auto     source = ConfiguredSource(options);
+  const auto     format = itk::CTVolumeWriter::FormatFromString(options.Format);
   const fs::path output(options.Output);
   if (output.empty())
   {
@@ -289,39 +463,12 @@ RunPhantom(const PhantomOptions & options)
   writer->SetSeed(source->GetSeed());
   writer->SetSeriesDescription("VirtualUnwrapping phantom " + options.Preset);
   // A hospital CT series: tilted gantry, spacing that changes, slices left out.
-  const bool          hospital = has("gantry-tilt") || has("second-slice-spacing") || !options.DropSlices.empty();
-  std::vector<double> sliceLocations;
+  const auto                has = [&](const char * name) { return options.Values.count(name) > 0; };
+  const bool                hospital = has("gantry-tilt") || has("second-slice-spacing") || !options.DropSlices.empty();
+  const std::vector<double> sliceLocations = hospital ? HospitalSliceLocations(options, volume) : std::vector<double>{};
   if (hospital)
   {
-    const auto   volumeSize = volume->GetLargestPossibleRegion().GetSize();
-    const double sliceSpacing = volume->GetSpacing()[2];
-    const double extent = sliceSpacing * static_cast<double>(volumeSize[2] - 1);
-    if (has("second-slice-spacing"))
-    {
-      sliceLocations =
-        itk::CTVolumeWriter::SliceLocationsWithSpacingChange(extent, sliceSpacing, value("second-slice-spacing"));
-    }
-    else
-    {
-      for (size_t k = 0; k < volumeSize[2]; ++k)
-      {
-        sliceLocations.push_back(static_cast<double>(k) * sliceSpacing);
-      }
-    }
-    std::vector<unsigned> drop = options.DropSlices;
-    std::sort(drop.begin(), drop.end());
-    drop.erase(std::unique(drop.begin(), drop.end()), drop.end());
-    for (auto k = drop.rbegin(); k != drop.rend(); ++k)
-    {
-      if (*k == 0 || *k + 1 >= sliceLocations.size())
-      {
-        throw UsageError("--drop-slices: slice " + std::to_string(*k) +
-                         " is not between the first and the last (0 and " + std::to_string(sliceLocations.size() - 1) +
-                         ")");
-      }
-      sliceLocations.erase(sliceLocations.begin() + *k);
-    }
-    writer->SetGantryTilt(has("gantry-tilt") ? value("gantry-tilt") : 0.0);
+    writer->SetGantryTilt(has("gantry-tilt") ? options.Values.at("gantry-tilt") : 0.0);
     writer->SetSliceLocations(sliceLocations);
   }
   writer->Write();
@@ -339,115 +486,13 @@ RunPhantom(const PhantomOptions & options)
   WriteObj(flat, (staging.Path() / "ground_truth_flat.obj").string());
   const double totalSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-  const auto     size = volume->GetLargestPossibleRegion().GetSize();
-  const auto     spacing = volume->GetSpacing();
-  const auto     origin = volume->GetOrigin();
-  const auto *   ink = geometry.GetInkImage();
-  const auto     inkSize = ink->GetLargestPossibleRegion().GetSize();
-  nlohmann::json direction = nlohmann::json::array();
-  for (unsigned r = 0; r < 3; ++r)
-  {
-    direction.push_back({ volume->GetDirection()[r][0], volume->GetDirection()[r][1], volume->GetDirection()[r][2] });
-  }
-  const auto &      p = geometry.GetParameters();
-  const bool        rolled = p.Shape == itk::SheetPhantomGeometry::ShapeType::Rolled;
-  nlohmann::json    json;
-  const std::string stored =
-    format == itk::CTVolumeWriter::FormatType::Dicom
-      ? "int16 stored values, HU = stored * RescaleSlope (1) + RescaleIntercept (-1024)"
-    : format == itk::CTVolumeWriter::FormatType::Tiff
-      ? "uint16, HU = value - 1024 (HU below -1024 clipped); TIFF has no 3D geometry: use spacing_mm and origin_mm"
-      : "int16 HU";
-  json["text"] = geometry.GetText();
-  json["preset"] = options.Preset;
-  json["preset_description"] = Source::GetPresetDescription(options.Preset);
-  json["sheet"] = { { "shape", itk::SheetPhantomGeometry::ShapeName(p.Shape) },
-                    { "length_mm", p.SheetLength },
-                    { "width_mm", p.SheetWidth },
-                    { "thickness_mm", p.SheetThickness },
-                    { "tilt_deg", p.TiltAngle },
-                    { "minimum_curvature_radius_mm", geometry.GetMinimumCurvatureRadius() } };
-  if (rolled)
-  {
-    json["sheet"]["turns"] = geometry.GetNumberOfTurns();
-    json["sheet"]["inner_radius_mm"] = p.InnerRadius;
-    json["sheet"]["pitch_mm"] = p.Pitch;
-    json["sheet"]["gap_mm"] = p.Pitch - p.SheetThickness;
-    json["sheet"]["squash"] = p.Squash;
-    json["sheet"]["wave_amplitude_mm"] = p.WaveAmplitude;
-    json["sheet"]["waves_per_turn"] = p.WavesPerTurn;
-  }
-  else
-  {
-    json["sheet"]["fold_count"] = p.FoldCount;
-    json["sheet"]["fold_radius_mm"] = p.FoldRadius;
-    json["sheet"]["fold_opening_deg"] = p.FoldOpeningAngle;
-  }
-  json["ink"] = { { "source", options.InkImage.empty() ? "text" : "image" },
-                  { "image_file", options.InkImage },
-                  { "font", source->GetFontFile() },
-                  { "glyph_height_mm", source->GetGlyphHeight() },
-                  { "contrast_hu", source->GetInkContrast() },
-                  { "depth_mm", source->GetInkDepth() },
-                  { "face", "the face SurfaceNormal points out of (rolled: the inner, concave face)" },
-                  { "image_size", { inkSize[0], inkSize[1] } },
-                  { "image_spacing_mm", { ink->GetSpacing()[0], ink->GetSpacing()[1] } } };
-  json["material"] = { { "air_hu", source->GetAirValue() },
-                       { "sheet_hu", source->GetSheetValue() },
-                       { "fibre_contrast_hu", source->GetFibreContrast() },
-                       { "fibre_length_mm", source->GetFibreLength() } };
-  json["scan"] = { { "voxel_size_mm", source->GetVoxelSize() },
-                   { "slice_spacing_mm", source->GetSliceSpacing() },
-                   { "margin_mm", source->GetMargin() },
-                   { "supersampling", source->GetSupersampling() },
-                   { "ink_oversampling", source->GetInkOversampling() },
-                   { "blur_fwhm_mm", source->GetBlurFWHM() },
-                   { "noise_sd_hu", source->GetNoiseStandardDeviation() },
-                   { "seed", source->GetSeed() } };
-  json["volume"] = { { "format", options.Format },
-                     { "path", volumeName },
-                     { "size", { size[0], size[1], size[2] } },
-                     { "voxels", size[0] * size[1] * size[2] },
-                     { "spacing_mm", Vector3(spacing.GetDataPointer()) },
-                     { "origin_mm", Vector3(origin.GetDataPointer()) },
-                     { "direction", direction },
-                     { "values", stored } };
-  if (hospital)
-  {
-    json["series"] = { { "description",
-                         "the DICOM series is sampled from the volume above (cubic B-spline) on tilted or relocated "
-                         "slices: slice k lies at slice_locations_mm[k] along the volume's z axis from its first "
-                         "slice, its origin moved along y by -tan(gantry_tilt_deg) times that distance (then the "
-                         "slices are widened to hold the whole volume)" },
-                       { "gantry_tilt_deg", writer->GetGantryTilt() },
-                       { "slice_locations_mm", sliceLocations },
-                       { "dropped_slices", options.DropSlices } };
-  }
-  json["mapping"] = {
-    { "description",
-      "Sheet coordinates: s = arc length from the inner end (0..length_mm), w = across the sheet along the roll "
-      "axis (0..width_mm). Mid-surface point P(s, w) = R_x(tilt_deg) * (C(s), w - width_mm / 2) in the volume's "
-      "physical frame (mm), where C is the cross-section curve (rolled: Archimedean spiral r = inner_radius + "
-      "pitch * theta / 2pi + wave_amplitude * sin(waves_per_turn * theta), x = r cos theta, y = squash * r sin "
-      "theta, counter-clockwise from the inner end; folded: flat panels joined by creases of fold_radius_mm turning "
-      "alternately left and right by 180 - fold_opening_deg degrees). Ink normal n = dP/dw x dP/ds." },
-    { "surface_obj", "ground_truth_surface.obj" },
-    { "flat_obj", "ground_truth_flat.obj" },
-    { "mesh_spacing_mm", meshSpacing },
-    { "grid_rows", surface.GridRows },
-    { "grid_columns", surface.GridColumns },
-    { "vertex_order",
-      "vertex r * grid_columns + c (1-based in OBJ: +1) lies at s = c * length_mm / (grid_columns - 1), "
-      "w = r * width_mm / (grid_rows - 1); the flat OBJ has the same faces with vertices (s, w, 0)" },
-    { "faces", "oriented so that right-hand normals of the surface OBJ point out of the inked face" },
-    { "ink_png",
-      "ground_truth_ink.png: 8-bit, 255 = full ink coverage; column = s / image_spacing_mm[0] - 0.5, row = w / "
-      "image_spacing_mm[1] - 0.5; text upright and unmirrored when shown with row 0 at the top" }
-  };
+  nlohmann::json json = GroundTruthJson(options, *source, volumeName, *writer, sliceLocations, surface, meshSpacing);
   json["timing_seconds"] = { { "volume", generationSeconds }, { "total", totalSeconds } };
   WriteTextFileAtomically((staging.Path() / "ground_truth.json").string(), json.dump(2) + "\n");
 
   staging.Commit(OutputStaging::Existing::Replace);
+  const auto   size = volume->GetLargestPossibleRegion().GetSize();
+  const auto & p = geometry.GetParameters();
   std::cout << "phantom " << options.Preset << ": " << size[0] << " x " << size[1] << " x " << size[2]
             << " voxels, sheet " << p.SheetLength << " x " << p.SheetWidth << " mm, volume " << generationSeconds
             << " s, total " << totalSeconds << " s -> " << output.string() << std::endl;

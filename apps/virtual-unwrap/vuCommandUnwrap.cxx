@@ -73,7 +73,7 @@ struct UnwrapOptions
   std::string       Output;
   ReaderOptions     Reader;
   std::string       Threshold{ "auto" };
-  double            MeshSpacing{ 0.0 };
+  std::string       MeshSpacing{ "auto" };
   std::string       Method{ "auto" };
   unsigned int      Layers{ 0 };
   double            LayerSpacing{ 0.0 };
@@ -469,6 +469,8 @@ CheckUnwrapOptions(const UnwrapOptions & options)
   {
     throw UsageError("--side auto splits the layers at the focus: give an odd number of --layers");
   }
+  double meshSpacing[2];
+  ParseMeshSpacing(options.MeshSpacing, meshSpacing);
   if (options.Threshold == "auto")
   {
     return std::numeric_limits<double>::quiet_NaN();
@@ -746,8 +748,10 @@ RunUnwrap(UnwrapOptions & options)
   surfaceFilter->SetInput(segmentation->GetOutput());
   surfaceFilter->SetIntensityImage(scan.Filled.Volume);
   surfaceFilter->SetMethod(itk::SheetSurfaceMethodFromString(options.Method));
-  surfaceFilter->SetSpacingAlongSheet(options.MeshSpacing);
-  surfaceFilter->SetSpacingAlongAxis(options.MeshSpacing);
+  double meshSpacing[2] = { 0.0, 0.0 }; // automatic
+  ParseMeshSpacing(options.MeshSpacing, meshSpacing);
+  surfaceFilter->SetSpacingAlongSheet(meshSpacing[0]);
+  surfaceFilter->SetSpacingAlongAxis(meshSpacing[1]);
   progress.Observe(surfaceFilter);
   surfaceFilter->Update();
   Results results;
@@ -869,9 +873,12 @@ RegisterUnwrapCommand(CLI::App & app)
   command->add_option("--threshold", options.Threshold, "sheet threshold in the volume's units (HU), or auto (Otsu)")
     ->capture_default_str()
     ->group(seg);
-  command->add_option("--mesh-spacing", options.MeshSpacing, "mesh spacing in mm; 0: automatic from the scene")
+  command
+    ->add_option("--mesh-spacing",
+                 options.MeshSpacing,
+                 "mesh spacing in mm along the sheet and the roll axis (MM or S,W), or auto (from curvature and "
+                 "thickness)")
     ->capture_default_str()
-    ->check(vu::NonNegative())
     ->group(seg);
   command->add_option("--method", options.Method, "mid-surface method: auto, roll or general")
     ->capture_default_str()

@@ -84,13 +84,12 @@ LLVMFuzzerTestOneInput(const uint8_t * data, size_t size)
 
   vu::ReaderOptions     reader;
   vu::SimulationOptions simulation;
-  std::string           segmentSpacing = "auto";
-  double                unwrapSpacing = 0.0;
+  std::string           meshSpacing = "auto";
   CLI::App              app{ "fuzz" };
   vu::AddReaderOptions(app, reader);
   vu::AddSimulationOptions(&app, simulation);
-  app.add_option("--segment-mesh-spacing", segmentSpacing);
-  app.add_option("--mesh-spacing", unwrapSpacing)->check(vu::NonNegative());
+  // segment and unwrap take the same --mesh-spacing (MM, S,W or auto).
+  app.add_option("--mesh-spacing", meshSpacing);
   try
   {
     app.parse(static_cast<int>(argv.size()), argv.data());
@@ -102,7 +101,7 @@ LLVMFuzzerTestOneInput(const uint8_t * data, size_t size)
   try
   {
     double spacing[2] = { 0.0, 0.0 };
-    vu::ParseMeshSpacing(segmentSpacing, spacing);
+    vu::ParseMeshSpacing(meshSpacing, spacing);
     auto volumeReader = itk::CTVolumeReader::New();
     vu::ConfigureReader(reader, "volume.mha", *volumeReader);
     static const itk::SheetMesh         grid = SmallGrid();

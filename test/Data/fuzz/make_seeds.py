@@ -124,7 +124,7 @@ for name, line in {
     "spacing": "--spacing 0.1 0.1 0.25",
     "shrink": "--shrink 2 --slice-tolerance 0.1 --interpolator linear",
     "series": "--series 1.2.840.113619 --resample-spacing 0.5 --no-resample",
-    "segment_mesh_spacing": "--segment-mesh-spacing 0.5,auto",
+    "mesh_spacing_pair": "--mesh-spacing 0.5,auto",
     "mesh_spacing": "--mesh-spacing 0.3",
     "lock": "--lock 0 3 11",
     "locked_edge": "--locked-edge inner --integrator rk4 --time-step 0.001",
