@@ -54,6 +54,40 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GetIntensityImage() const ->
   return dynamic_cast<const IntensityImageType *>(this->ProcessObject::GetInput(1));
 }
 
+namespace SheetMidSurfaceDetail {
+/** The box of the voxels of `label` in `labels` within `region`, grown by `margin` voxels
+ * and cropped to `region`. */
+template <typename TLabelImage>
+ImageRegion<3>
+LabelBox(const TLabelImage * labels, const ImageRegion<3> & region, typename TLabelImage::PixelType label, long margin)
+{
+  using IndexType = Index<3>;
+  IndexType lower = region.GetUpperIndex(), upper = region.GetIndex();
+  for (ImageRegionConstIteratorWithIndex<TLabelImage> it(labels, region); !it.IsAtEnd(); ++it)
+  {
+    if (it.Get() == label)
+    {
+      const IndexType index = it.GetIndex();
+      for (unsigned d = 0; d < 3; ++d)
+      {
+        lower[d] = std::min(lower[d], index[d]);
+        upper[d] = std::max(upper[d], index[d]);
+      }
+    }
+  }
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    lower[d] -= margin;
+    upper[d] += margin;
+  }
+  ImageRegion<3> box;
+  box.SetIndex(lower);
+  box.SetUpperIndex(upper);
+  box.Crop(region);
+  return box;
+}
+} // namespace SheetMidSurfaceDetail
+
 template <typename TMaskImage, typename TOutputMesh>
 void
 SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
@@ -100,29 +134,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   }
 
   // Read only the bounding box of that sheet, plus two voxels.
-  using IndexType = typename MaskImageType::IndexType;
-  IndexType lower = region.GetUpperIndex(), upper = region.GetIndex();
-  for (ImageRegionConstIteratorWithIndex<LabelImageType> it(labels, region); !it.IsAtEnd(); ++it)
-  {
-    if (it.Get() == 1)
-    {
-      const IndexType index = it.GetIndex();
-      for (unsigned d = 0; d < 3; ++d)
-      {
-        lower[d] = std::min(lower[d], index[d]);
-        upper[d] = std::max(upper[d], index[d]);
-      }
-    }
-  }
-  typename MaskImageType::RegionType box;
-  for (unsigned d = 0; d < 3; ++d)
-  {
-    lower[d] -= 2;
-    upper[d] += 2;
-  }
-  box.SetIndex(lower);
-  box.SetUpperIndex(upper);
-  box.Crop(region);
+  const typename MaskImageType::RegionType box = SheetMidSurfaceDetail::LabelBox(labels, region, 1, 2);
 
   // The sheet's box as images of their own (index 0 at the box corner).
   using SheetImageType = Image<uint8_t, 3>;

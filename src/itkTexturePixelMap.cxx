@@ -100,6 +100,83 @@ ComputeTextureGrid(const SheetMesh & flat, double pixelSize, double margin)
   return map;
 }
 
+namespace {
+// Rasterises flat triangle t into the rows bandFirst..bandLast of `map`: every pixel centre
+// inside it gets the barycentric 3D point and interpolated unit normal (ZeroNormal where
+// the normals cancel).
+void
+RasteriseTriangle(TexturePixelMap &           map,
+                  const SheetMesh &           surface,
+                  const SheetMesh &           flat,
+                  const std::vector<double> & normals,
+                  uint32_t                    t,
+                  SizeValueType               bandFirst,
+                  SizeValueType               bandLast,
+                  double                      pixelSize)
+{
+  const SizeValueType columns = map.Size[0];
+  const double        inverse = 1.0 / pixelSize;
+  const uint32_t *    tri = &flat.Triangles[3 * t];
+  const double *      a = &flat.Points[3 * tri[0]];
+  const double *      p = &flat.Points[3 * tri[1]];
+  const double *      c = &flat.Points[3 * tri[2]];
+  const double        e1x = p[0] - a[0], e1y = p[1] - a[1], e2x = c[0] - a[0], e2y = c[1] - a[1];
+  const double        inverseDet = 1.0 / Cross2(e1x, e1y, e2x, e2y);
+  // Barycentric coordinates tolerate a sliver so that pixel centres on shared edges
+  // are covered whatever the rounding.
+  constexpr double tolerance = -1e-9;
+  const double     xmin = std::min({ a[0], p[0], c[0] }), xmax = std::max({ a[0], p[0], c[0] });
+  const double     ymin = std::min({ a[1], p[1], c[1] }), ymax = std::max({ a[1], p[1], c[1] });
+  const auto       c0 = static_cast<SizeValueType>(std::max(0.0, std::ceil((xmin - map.Origin[0]) * inverse - 1e-9)));
+  const double     c1 = std::min(static_cast<double>(columns - 1), std::floor((xmax - map.Origin[0]) * inverse + 1e-9));
+  const double     r0 = std::max(static_cast<double>(bandFirst), std::ceil((ymin - map.Origin[1]) * inverse - 1e-9));
+  const double     r1 = std::min(static_cast<double>(bandLast), std::floor((ymax - map.Origin[1]) * inverse + 1e-9));
+  const double *   sa = &surface.Points[3 * tri[0]];
+  const double *   sb = &surface.Points[3 * tri[1]];
+  const double *   sc = &surface.Points[3 * tri[2]];
+  const double *   na = &normals[3 * tri[0]];
+  const double *   nb = &normals[3 * tri[1]];
+  const double *   nc = &normals[3 * tri[2]];
+  for (auto row = static_cast<SizeValueType>(std::max(0.0, r0)); static_cast<double>(row) <= r1; ++row)
+  {
+    const double y = map.Origin[1] + row * pixelSize;
+    for (SizeValueType column = c0; static_cast<double>(column) <= c1; ++column)
+    {
+      const double x = map.Origin[0] + column * pixelSize;
+      const double vx = x - a[0], vy = y - a[1];
+      const double lb = Cross2(vx, vy, e2x, e2y) * inverseDet;
+      const double lc = Cross2(e1x, e1y, vx, vy) * inverseDet;
+      const double la = 1.0 - lb - lc;
+      if (la < tolerance || lb < tolerance || lc < tolerance)
+      {
+        continue;
+      }
+      const SizeValueType pixel = row * columns + column;
+      double              n[3];
+      for (int d = 0; d < 3; ++d)
+      {
+        n[d] = la * na[d] + lb * nb[d] + lc * nc[d];
+      }
+      const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      if (!(length > 1e-6))
+      {
+        if (map.Triangle[pixel] < 0)
+        {
+          map.Triangle[pixel] = ZeroNormal;
+        }
+        continue;
+      }
+      for (int d = 0; d < 3; ++d)
+      {
+        map.Positions[3 * pixel + d] = static_cast<float>(la * sa[d] + lb * sb[d] + lc * sc[d]);
+        map.Normals[3 * pixel + d] = static_cast<float>(n[d] / length);
+      }
+      map.Triangle[pixel] = static_cast<int32_t>(t);
+    }
+  }
+}
+} // namespace
+
 TexturePixelMap
 ComputeTexturePixelMap(const SheetMesh & surface,
                        const SheetMesh & flat,
@@ -119,7 +196,6 @@ ComputeTexturePixelMap(const SheetMesh & surface,
                              << " triangles) differ in topology");
   }
   TexturePixelMap     map = ComputeTextureGrid(flat, pixelSize, margin);
-  const SizeValueType columns = map.Size[0];
   const SizeValueType rows = map.Size[1];
   map.Positions.assign(3 * map.GetNumberOfPixels(), 0.0f);
   map.Normals.assign(3 * map.GetNumberOfPixels(), 0.0f);
@@ -188,65 +264,7 @@ ComputeTexturePixelMap(const SheetMesh & surface,
       const SizeValueType bandLast = std::min(rows, bandFirst + RowsPerBand) - 1;
       for (const uint32_t t : bandTriangles[band])
       {
-        const uint32_t * tri = &flat.Triangles[3 * t];
-        const double *   a = &flat.Points[3 * tri[0]];
-        const double *   p = &flat.Points[3 * tri[1]];
-        const double *   c = &flat.Points[3 * tri[2]];
-        const double     e1x = p[0] - a[0], e1y = p[1] - a[1], e2x = c[0] - a[0], e2y = c[1] - a[1];
-        const double     inverseDet = 1.0 / Cross2(e1x, e1y, e2x, e2y);
-        // Barycentric coordinates tolerate a sliver so that pixel centres on shared edges
-        // are covered whatever the rounding.
-        constexpr double tolerance = -1e-9;
-        const double     xmin = std::min({ a[0], p[0], c[0] }), xmax = std::max({ a[0], p[0], c[0] });
-        const double     ymin = std::min({ a[1], p[1], c[1] }), ymax = std::max({ a[1], p[1], c[1] });
-        const auto   c0 = static_cast<SizeValueType>(std::max(0.0, std::ceil((xmin - map.Origin[0]) * inverse - 1e-9)));
-        const double c1 =
-          std::min(static_cast<double>(columns - 1), std::floor((xmax - map.Origin[0]) * inverse + 1e-9));
-        const double r0 = std::max(static_cast<double>(bandFirst), std::ceil((ymin - map.Origin[1]) * inverse - 1e-9));
-        const double r1 = std::min(static_cast<double>(bandLast), std::floor((ymax - map.Origin[1]) * inverse + 1e-9));
-        const double * sa = &surface.Points[3 * tri[0]];
-        const double * sb = &surface.Points[3 * tri[1]];
-        const double * sc = &surface.Points[3 * tri[2]];
-        const double * na = &normals[3 * tri[0]];
-        const double * nb = &normals[3 * tri[1]];
-        const double * nc = &normals[3 * tri[2]];
-        for (auto row = static_cast<SizeValueType>(std::max(0.0, r0)); static_cast<double>(row) <= r1; ++row)
-        {
-          const double y = map.Origin[1] + row * pixelSize;
-          for (SizeValueType column = c0; static_cast<double>(column) <= c1; ++column)
-          {
-            const double x = map.Origin[0] + column * pixelSize;
-            const double vx = x - a[0], vy = y - a[1];
-            const double lb = Cross2(vx, vy, e2x, e2y) * inverseDet;
-            const double lc = Cross2(e1x, e1y, vx, vy) * inverseDet;
-            const double la = 1.0 - lb - lc;
-            if (la < tolerance || lb < tolerance || lc < tolerance)
-            {
-              continue;
-            }
-            const SizeValueType pixel = row * columns + column;
-            double              n[3];
-            for (int d = 0; d < 3; ++d)
-            {
-              n[d] = la * na[d] + lb * nb[d] + lc * nc[d];
-            }
-            const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-            if (!(length > 1e-6))
-            {
-              if (map.Triangle[pixel] < 0)
-              {
-                map.Triangle[pixel] = ZeroNormal;
-              }
-              continue;
-            }
-            for (int d = 0; d < 3; ++d)
-            {
-              map.Positions[3 * pixel + d] = static_cast<float>(la * sa[d] + lb * sb[d] + lc * sc[d]);
-              map.Normals[3 * pixel + d] = static_cast<float>(n[d] / length);
-            }
-            map.Triangle[pixel] = static_cast<int32_t>(t);
-          }
-        }
+        RasteriseTriangle(map, surface, flat, normals, t, bandFirst, bandLast, pixelSize);
       }
     },
     progress ? progress->GetProcessObject() : nullptr);
