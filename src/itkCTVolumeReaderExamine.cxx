@@ -48,6 +48,58 @@ using namespace detail;
 using CTReading::DescribeSeries;
 using CTReading::Refuse;
 using OutputImageType = CTVolumeReader::OutputImageType;
+
+// The series to read among `series` (sorted by decreasing number of slices): the one whose
+// SeriesInstanceUID or unique series number is `identifier`, or without one the one with
+// the most slices; refused when that is not one series.
+size_t
+ChooseSeries(const std::vector<CTVolumeReader::SeriesInfo> & series,
+             const std::string &                             identifier,
+             const std::string &                             fileName)
+{
+  auto listAll = [&series]() {
+    std::string text;
+    for (const CTVolumeReader::SeriesInfo & s : series)
+    {
+      text += (text.empty() ? "" : "; ") + DescribeSeries(s);
+    }
+    return text;
+  };
+
+  size_t chosen = 0;
+  if (!identifier.empty())
+  {
+    std::vector<size_t> matches;
+    for (size_t i = 0; i < series.size(); ++i)
+    {
+      if (series[i].UID == identifier)
+      {
+        matches = { i };
+        break;
+      }
+      if (series[i].Number == identifier)
+      {
+        matches.push_back(i);
+      }
+    }
+    if (matches.empty())
+    {
+      throw std::runtime_error("no series '" + identifier + "' in " + fileName + "; series found: " + listAll());
+    }
+    if (matches.size() > 1)
+    {
+      throw std::runtime_error("series number " + identifier + " is not unique in " + fileName +
+                               ": choose by SeriesInstanceUID among " + listAll());
+    }
+    chosen = matches.front();
+  }
+  else if (series.size() > 1 && series[0].NumberOfSlices == series[1].NumberOfSlices)
+  {
+    throw std::runtime_error(fileName + " holds several series with " + std::to_string(series[0].NumberOfSlices) +
+                             " slices; choose one by series number or SeriesInstanceUID: " + listAll());
+  }
+  return chosen;
+}
 } // namespace
 
 void
@@ -156,48 +208,7 @@ CTVolumeReader::ExamineDicom(const std::vector<std::string> & files, bool single
   std::stable_sort(series.begin(), series.end(), [](const SeriesInfo & a, const SeriesInfo & b) {
     return a.NumberOfSlices > b.NumberOfSlices;
   });
-  auto listAll = [&series]() {
-    std::string text;
-    for (const SeriesInfo & s : series)
-    {
-      text += (text.empty() ? "" : "; ") + DescribeSeries(s);
-    }
-    return text;
-  };
-
-  size_t chosen = 0;
-  if (!m_SeriesIdentifier.empty())
-  {
-    std::vector<size_t> matches;
-    for (size_t i = 0; i < series.size(); ++i)
-    {
-      if (series[i].UID == m_SeriesIdentifier)
-      {
-        matches = { i };
-        break;
-      }
-      if (series[i].Number == m_SeriesIdentifier)
-      {
-        matches.push_back(i);
-      }
-    }
-    if (matches.empty())
-    {
-      throw std::runtime_error("no series '" + m_SeriesIdentifier + "' in " + m_FileName +
-                               "; series found: " + listAll());
-    }
-    if (matches.size() > 1)
-    {
-      throw std::runtime_error("series number " + m_SeriesIdentifier + " is not unique in " + m_FileName +
-                               ": choose by SeriesInstanceUID among " + listAll());
-    }
-    chosen = matches.front();
-  }
-  else if (series.size() > 1 && series[0].NumberOfSlices == series[1].NumberOfSlices)
-  {
-    throw std::runtime_error(m_FileName + " holds several series with " + std::to_string(series[0].NumberOfSlices) +
-                             " slices; choose one by series number or SeriesInstanceUID: " + listAll());
-  }
+  const size_t chosen = ChooseSeries(series, m_SeriesIdentifier, m_FileName);
   m_ChosenSeries = series[chosen];
   for (size_t i = 0; i < series.size(); ++i)
   {
