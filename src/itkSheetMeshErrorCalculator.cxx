@@ -92,6 +92,91 @@ SquaredDistanceToTriangle(const double p[3], const double a[3], const double b[3
   const double q[3] = { a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w };
   return distanceTo(q);
 }
+// The triangles of a mesh binned in a uniform grid of cells at least 2 `tolerance` wide (at
+// most 256 a side) over its bounding box grown by `tolerance`; each triangle in every cell
+// its box grown by `tolerance` touches.
+class TriangleGrid
+{
+public:
+  TriangleGrid(const SheetMesh & mesh, double tolerance)
+  {
+    for (int d = 0; d < 3; ++d)
+    {
+      m_Lower[d] = m_Upper[d] = mesh.Points[d];
+    }
+    for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+    {
+      for (int d = 0; d < 3; ++d)
+      {
+        m_Lower[d] = std::min(m_Lower[d], mesh.Points[3 * i + d]);
+        m_Upper[d] = std::max(m_Upper[d], mesh.Points[3 * i + d]);
+      }
+    }
+    m_Cell = 2.0 * tolerance;
+    for (int d = 0; d < 3; ++d)
+    {
+      m_Lower[d] -= tolerance;
+      m_Upper[d] += tolerance;
+      m_Cell = std::max(m_Cell, (m_Upper[d] - m_Lower[d]) / 256.0);
+    }
+    for (int d = 0; d < 3; ++d)
+    {
+      m_Cells[d] = std::max(1L, static_cast<long>(std::ceil((m_Upper[d] - m_Lower[d]) / m_Cell)));
+    }
+    m_Bins.resize(static_cast<size_t>(m_Cells[0] * m_Cells[1] * m_Cells[2]));
+    for (size_t t = 0; t < mesh.GetNumberOfTriangles(); ++t)
+    {
+      long from[3], to[3];
+      for (int d = 0; d < 3; ++d)
+      {
+        double lo = mesh.Points[3 * mesh.Triangles[3 * t] + d], hi = lo;
+        for (int v = 1; v < 3; ++v)
+        {
+          lo = std::min(lo, mesh.Points[3 * mesh.Triangles[3 * t + v] + d]);
+          hi = std::max(hi, mesh.Points[3 * mesh.Triangles[3 * t + v] + d]);
+        }
+        from[d] = CellOf(lo - tolerance, d);
+        to[d] = CellOf(hi + tolerance, d);
+      }
+      for (long z = from[2]; z <= to[2]; ++z)
+      {
+        for (long y = from[1]; y <= to[1]; ++y)
+        {
+          for (long x = from[0]; x <= to[0]; ++x)
+          {
+            m_Bins[static_cast<size_t>((z * m_Cells[1] + y) * m_Cells[0] + x)].push_back(static_cast<uint32_t>(t));
+          }
+        }
+      }
+    }
+  }
+
+  /** The triangles near point p; null outside the grid. */
+  const std::vector<uint32_t> *
+  BinAt(const double p[3]) const
+  {
+    for (int d = 0; d < 3; ++d)
+    {
+      if (p[d] < m_Lower[d] || p[d] > m_Upper[d])
+      {
+        return nullptr;
+      }
+    }
+    return &m_Bins[static_cast<size_t>((CellOf(p[2], 2) * m_Cells[1] + CellOf(p[1], 1)) * m_Cells[0] +
+                                       CellOf(p[0], 0))];
+  }
+
+private:
+  long
+  CellOf(double x, int d) const
+  {
+    return std::clamp(static_cast<long>(std::floor((x - m_Lower[d]) / m_Cell)), 0L, m_Cells[d] - 1);
+  }
+
+  double                             m_Lower[3], m_Upper[3], m_Cell{ 0.0 };
+  long                               m_Cells[3]{ 1, 1, 1 };
+  std::vector<std::vector<uint32_t>> m_Bins;
+};
 } // namespace
 
 void
@@ -195,61 +280,8 @@ SheetMeshErrorCalculator::Compute()
   }
 
   // Triangles binned in a uniform grid whose cells are at least the tolerance wide.
-  const double tolerance = m_CoverageTolerance * m_VoxelSize;
-  double       lower[3], upper[3];
-  for (int d = 0; d < 3; ++d)
-  {
-    lower[d] = upper[d] = m_Mesh.Points[d];
-  }
-  for (size_t i = 0; i < points; ++i)
-  {
-    for (int d = 0; d < 3; ++d)
-    {
-      lower[d] = std::min(lower[d], m_Mesh.Points[3 * i + d]);
-      upper[d] = std::max(upper[d], m_Mesh.Points[3 * i + d]);
-    }
-  }
-  double cell = 2.0 * tolerance;
-  for (int d = 0; d < 3; ++d)
-  {
-    lower[d] -= tolerance;
-    upper[d] += tolerance;
-    cell = std::max(cell, (upper[d] - lower[d]) / 256.0);
-  }
-  long cells[3];
-  for (int d = 0; d < 3; ++d)
-  {
-    cells[d] = std::max(1L, static_cast<long>(std::ceil((upper[d] - lower[d]) / cell)));
-  }
-  auto cellOf = [&](double x, int d) {
-    return std::clamp(static_cast<long>(std::floor((x - lower[d]) / cell)), 0L, cells[d] - 1);
-  };
-  std::vector<std::vector<uint32_t>> bins(static_cast<size_t>(cells[0] * cells[1] * cells[2]));
-  for (size_t t = 0; t < triangles; ++t)
-  {
-    long from[3], to[3];
-    for (int d = 0; d < 3; ++d)
-    {
-      double lo = m_Mesh.Points[3 * m_Mesh.Triangles[3 * t] + d], hi = lo;
-      for (int v = 1; v < 3; ++v)
-      {
-        lo = std::min(lo, m_Mesh.Points[3 * m_Mesh.Triangles[3 * t + v] + d]);
-        hi = std::max(hi, m_Mesh.Points[3 * m_Mesh.Triangles[3 * t + v] + d]);
-      }
-      from[d] = cellOf(lo - tolerance, d);
-      to[d] = cellOf(hi + tolerance, d);
-    }
-    for (long z = from[2]; z <= to[2]; ++z)
-    {
-      for (long y = from[1]; y <= to[1]; ++y)
-      {
-        for (long x = from[0]; x <= to[0]; ++x)
-        {
-          bins[static_cast<size_t>((z * cells[1] + y) * cells[0] + x)].push_back(static_cast<uint32_t>(t));
-        }
-      }
-    }
-  }
+  const double       tolerance = m_CoverageTolerance * m_VoxelSize;
+  const TriangleGrid grid(m_Mesh, tolerance);
 
   // The true mid-surface, sampled at cell centres of half a voxel.
   const double               step = 0.5 * m_VoxelSize;
@@ -267,14 +299,12 @@ SheetMeshErrorCalculator::Compute()
         const double s = (static_cast<double>(column) + 0.5) * length / static_cast<double>(samplesS);
         double       p[3];
         m_Geometry.SurfacePoint(s, w, p);
-        if (p[0] < lower[0] || p[1] < lower[1] || p[2] < lower[2] || p[0] > upper[0] || p[1] > upper[1] ||
-            p[2] > upper[2])
+        const std::vector<uint32_t> * bin = grid.BinAt(p);
+        if (bin == nullptr)
         {
           continue;
         }
-        const auto & bin =
-          bins[static_cast<size_t>((cellOf(p[2], 2) * cells[1] + cellOf(p[1], 1)) * cells[0] + cellOf(p[0], 0))];
-        for (uint32_t t : bin)
+        for (uint32_t t : *bin)
         {
           const uint32_t * tri = &m_Mesh.Triangles[3 * t];
           if (SquaredDistanceToTriangle(
