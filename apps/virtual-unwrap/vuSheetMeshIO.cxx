@@ -104,179 +104,222 @@ CheckObjVertices(const std::string & path)
 // or BINARY (big-endian), version 2 to 4 layout. Every size a section claims is checked
 // against the bytes left in the file before anything is allocated or read: both ITK's
 // and VTK's legacy readers read past their buffers on a truncated binary file.
-itk::SheetMesh
-ReadLegacyVtk(const std::string & path)
+// The reading state of one legacy VTK file: every failure is one line naming the file.
+class LegacyVtkReader
 {
-  auto fail = [&path](const std::string & why) { throw UsageError("cannot read a mesh from " + path + ": " + why); };
-  std::ifstream   in(path, std::ios::binary);
-  const uintmax_t fileSize = std::filesystem::file_size(path);
-  auto            remaining = [&in, fileSize]() -> uintmax_t {
-    const auto at = in.tellg();
-    return at < 0 || static_cast<uintmax_t>(at) > fileSize ? 0 : fileSize - static_cast<uintmax_t>(at);
-  };
-  std::string line, format, word, kind;
-  if (!std::getline(in, line) || line.rfind("# vtk DataFile", 0) != 0)
+public:
+  explicit LegacyVtkReader(const std::string & path)
+    : m_Path(path)
+    , m_In(path, std::ios::binary)
+    , m_FileSize(std::filesystem::file_size(path))
+  {}
+
+  itk::SheetMesh
+  Read()
   {
-    fail("not a legacy VTK file");
+    std::string line, format, word, kind;
+    if (!std::getline(m_In, line) || line.rfind("# vtk DataFile", 0) != 0)
+    {
+      Fail("not a legacy VTK file");
+    }
+    std::getline(m_In, line); // title
+    m_In >> format >> word >> kind;
+    if (!m_In || (format != "ASCII" && format != "BINARY"))
+    {
+      Fail("the third line must say ASCII or BINARY");
+    }
+    if (word != "DATASET" || kind != "POLYDATA")
+    {
+      Fail("not DATASET POLYDATA");
+    }
+    m_Binary = format == "BINARY";
+    itk::SheetMesh sheet;
+    bool           havePoints = false;
+    while (m_In >> word)
+    {
+      if (word == "POINTS")
+      {
+        ReadPoints(sheet);
+        havePoints = true;
+      }
+      else if (word == "POLYGONS" || word == "VERTICES" || word == "LINES" || word == "TRIANGLE_STRIPS")
+      {
+        long long n = 0, size = 0;
+        m_In >> n >> size;
+        if (!m_In || n < 0 || size < 0 || size < n)
+        {
+          Fail(word + " must give a cell count and a size");
+        }
+        std::vector<long long> values;
+        ReadIntegers(size, values);
+        if (word != "POLYGONS")
+        {
+          continue; // not part of a sheet
+        }
+        if (!havePoints)
+        {
+          Fail("POLYGONS before POINTS");
+        }
+        AppendTriangles(n, values, sheet);
+        return sheet; // the attributes that may follow are not needed
+      }
+      else
+      {
+        break;
+      }
+    }
+    Fail(havePoints ? "no POLYGONS" : "no POINTS");
   }
-  std::getline(in, line); // title
-  in >> format >> word >> kind;
-  if (!in || (format != "ASCII" && format != "BINARY"))
+
+private:
+  [[noreturn]] void
+  Fail(const std::string & why) const
   {
-    fail("the third line must say ASCII or BINARY");
+    throw UsageError("cannot read a mesh from " + m_Path + ": " + why);
   }
-  if (word != "DATASET" || kind != "POLYDATA")
+
+  uintmax_t
+  Remaining()
   {
-    fail("not DATASET POLYDATA");
+    const auto at = m_In.tellg();
+    return at < 0 || static_cast<uintmax_t>(at) > m_FileSize ? 0 : m_FileSize - static_cast<uintmax_t>(at);
   }
-  const bool     binary = format == "BINARY";
-  itk::SheetMesh sheet;
-  auto           bigEndian = [](const char * bytes, size_t size, void * value) {
+
+  static void
+  BigEndian(const char * bytes, size_t size, void * value)
+  {
     char swapped[8];
     for (size_t i = 0; i < size; ++i)
     {
       swapped[i] = bytes[size - 1 - i];
     }
     std::memcpy(value, swapped, size);
-  };
+  }
+
   // Reads count 32-bit integers (cell sizes and point ids).
-  auto readIntegers = [&](long long count, std::vector<long long> & values) {
-    if (binary)
+  void
+  ReadIntegers(long long count, std::vector<long long> & values)
+  {
+    if (m_Binary)
     {
-      if (static_cast<uintmax_t>(count) * 4 > remaining())
+      if (static_cast<uintmax_t>(count) * 4 > Remaining())
       {
-        fail("a cell section claims more data than the file holds");
+        Fail("a cell section claims more data than the file holds");
       }
-      in.get(); // the newline before the data
+      m_In.get(); // the newline before the data
       std::vector<char> bytes(static_cast<size_t>(count) * 4);
-      in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+      m_In.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
       values.resize(static_cast<size_t>(count));
       for (size_t i = 0; i < values.size(); ++i)
       {
         int32_t v = 0;
-        bigEndian(&bytes[4 * i], 4, &v);
+        BigEndian(&bytes[4 * i], 4, &v);
         values[i] = v;
       }
     }
     else
     {
-      if (static_cast<uintmax_t>(count) * 2 > remaining() + 1)
+      if (static_cast<uintmax_t>(count) * 2 > Remaining() + 1)
       {
-        fail("a cell section claims more numbers than the file holds");
+        Fail("a cell section claims more numbers than the file holds");
       }
       values.resize(static_cast<size_t>(count));
       for (auto & v : values)
       {
-        in >> v;
+        m_In >> v;
       }
     }
-    if (!in)
+    if (!m_In)
     {
-      fail("a cell section is cut short or holds something other than whole numbers");
+      Fail("a cell section is cut short or holds something other than whole numbers");
     }
-  };
-  bool havePoints = false;
-  while (in >> word)
+  }
+
+  void
+  ReadPoints(itk::SheetMesh & sheet)
   {
-    if (word == "POINTS")
+    long long   n = 0;
+    std::string type;
+    m_In >> n >> type;
+    const size_t bytes = type == "float" ? 4 : type == "double" ? 8 : 0;
+    if (!m_In || n <= 0 || bytes == 0)
     {
-      long long   n = 0;
-      std::string type;
-      in >> n >> type;
-      const size_t bytes = type == "float" ? 4 : type == "double" ? 8 : 0;
-      if (!in || n <= 0 || bytes == 0)
-      {
-        fail("the POINTS line must give a positive count and float or double");
-      }
-      if (static_cast<uintmax_t>(n) * 3 * (binary ? bytes : 2) > remaining() + 1)
-      {
-        fail("POINTS claims " + std::to_string(n) + " points, more than the file holds");
-      }
-      sheet.Points.resize(static_cast<size_t>(3 * n));
-      if (binary)
-      {
-        in.get();
-        std::vector<char> data(sheet.Points.size() * bytes);
-        in.read(data.data(), static_cast<std::streamsize>(data.size()));
-        for (size_t i = 0; i < sheet.Points.size(); ++i)
-        {
-          if (bytes == 4)
-          {
-            float v = 0.0f;
-            bigEndian(&data[4 * i], 4, &v);
-            sheet.Points[i] = v;
-          }
-          else
-          {
-            bigEndian(&data[8 * i], 8, &sheet.Points[i]);
-          }
-        }
-      }
-      else
-      {
-        for (double & v : sheet.Points)
-        {
-          in >> v;
-        }
-      }
-      if (!in)
-      {
-        fail("POINTS is cut short or holds something other than numbers");
-      }
-      havePoints = true;
+      Fail("the POINTS line must give a positive count and float or double");
     }
-    else if (word == "POLYGONS" || word == "VERTICES" || word == "LINES" || word == "TRIANGLE_STRIPS")
+    if (static_cast<uintmax_t>(n) * 3 * (m_Binary ? bytes : 2) > Remaining() + 1)
     {
-      long long n = 0, size = 0;
-      in >> n >> size;
-      if (!in || n < 0 || size < 0 || size < n)
+      Fail("POINTS claims " + std::to_string(n) + " points, more than the file holds");
+    }
+    sheet.Points.resize(static_cast<size_t>(3 * n));
+    if (m_Binary)
+    {
+      m_In.get();
+      std::vector<char> data(sheet.Points.size() * bytes);
+      m_In.read(data.data(), static_cast<std::streamsize>(data.size()));
+      for (size_t i = 0; i < sheet.Points.size(); ++i)
       {
-        fail(word + " must give a cell count and a size");
-      }
-      std::vector<long long> values;
-      readIntegers(size, values);
-      if (word != "POLYGONS")
-      {
-        continue; // not part of a sheet
-      }
-      if (!havePoints)
-      {
-        fail("POLYGONS before POINTS");
-      }
-      size_t i = 0;
-      for (long long cell = 0; cell < n; ++cell)
-      {
-        if (i < values.size() && values[i] != 3)
+        if (bytes == 4)
         {
-          fail("a polygon is not a triangle");
+          float v = 0.0f;
+          BigEndian(&data[4 * i], 4, &v);
+          sheet.Points[i] = v;
         }
-        if (i + 3 >= values.size())
+        else
         {
-          fail("POLYGONS holds fewer cells than it claims");
+          BigEndian(&data[8 * i], 8, &sheet.Points[i]);
         }
-        for (int k = 1; k <= 3; ++k)
-        {
-          if (values[i + k] < 0 || values[i + k] > std::numeric_limits<uint32_t>::max())
-          {
-            fail("a triangle refers to point " + std::to_string(values[i + k]));
-          }
-          sheet.Triangles.push_back(static_cast<uint32_t>(values[i + k]));
-        }
-        i += 4;
       }
-      return sheet; // the attributes that may follow are not needed
     }
     else
     {
-      break;
+      for (double & v : sheet.Points)
+      {
+        m_In >> v;
+      }
+    }
+    if (!m_In)
+    {
+      Fail("POINTS is cut short or holds something other than numbers");
     }
   }
-  if (!havePoints)
+
+  // The n triangles of a POLYGONS section's values (3, a, b, c per cell).
+  void
+  AppendTriangles(long long n, const std::vector<long long> & values, itk::SheetMesh & sheet) const
   {
-    fail("no POINTS");
+    size_t i = 0;
+    for (long long cell = 0; cell < n; ++cell)
+    {
+      if (i < values.size() && values[i] != 3)
+      {
+        Fail("a polygon is not a triangle");
+      }
+      if (i + 3 >= values.size())
+      {
+        Fail("POLYGONS holds fewer cells than it claims");
+      }
+      for (int k = 1; k <= 3; ++k)
+      {
+        if (values[i + k] < 0 || values[i + k] > std::numeric_limits<uint32_t>::max())
+        {
+          Fail("a triangle refers to point " + std::to_string(values[i + k]));
+        }
+        sheet.Triangles.push_back(static_cast<uint32_t>(values[i + k]));
+      }
+      i += 4;
+    }
   }
-  fail("no POLYGONS");
-  return sheet;
+
+  std::string     m_Path;
+  std::ifstream   m_In;
+  const uintmax_t m_FileSize;
+  bool            m_Binary{ false };
+};
+
+itk::SheetMesh
+ReadLegacyVtk(const std::string & path)
+{
+  return LegacyVtkReader(path).Read();
 }
 // Why VTK's XML reader cannot be given a file, or "": it sizes its arrays from the
 // counts the XML claims (NumberOfPoints, NumberOfComponents, ...) and loops over them
