@@ -23,8 +23,10 @@
 // function. Writes CSV to standard output (or --csv FILE).
 #include "itkMassSpringSheetFlattener.h"
 #include "itk_eigen.h"
+#include "vuTestMeshes.h"
 #include ITK_EIGEN(Eigenvalues)
 
+#include <array>
 #include <cmath>
 #include <complex>
 #include <fstream>
@@ -39,25 +41,9 @@ using Complex = std::complex<double>;
 itk::SheetMesh
 FlatGrid(int n, double spacing)
 {
-  itk::SheetMesh mesh;
-  mesh.GridRows = mesh.GridColumns = n;
-  for (int r = 0; r < n; ++r)
-  {
-    for (int c = 0; c < n; ++c)
-    {
-      mesh.Points.insert(mesh.Points.end(), { c * spacing, r * spacing, 0.0 });
-      mesh.GridIndex.insert(mesh.GridIndex.end(), { r, c });
-    }
-  }
-  for (int r = 0; r + 1 < n; ++r)
-  {
-    for (int c = 0; c + 1 < n; ++c)
-    {
-      const uint32_t a = r * n + c, b = a + 1, d = a + n, e = d + 1;
-      mesh.Triangles.insert(mesh.Triangles.end(), { a, b, e, a, e, d });
-    }
-  }
-  return mesh;
+  return vu::SquareGridMesh(n, [spacing](int r, int c) {
+    return std::array<double, 3>{ c * spacing, r * spacing, 0.0 };
+  });
 }
 
 // Angular frequencies of the linearised system at rest: sqrt(eig(M^-1/2 K M^-1/2)).

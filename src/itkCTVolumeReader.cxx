@@ -41,11 +41,7 @@
 
 namespace itk {
 namespace {
-namespace fs = std::filesystem;
-using namespace detail;
-using CTReading::DescribeSeries;
-using CTReading::Refuse;
-using OutputImageType = CTVolumeReader::OutputImageType;
+using namespace CTReading;
 
 // The index box that encloses the physical box between two corners (mm): each of its eight
 // corners mapped to a continuous index, the box clipped to the image (`clipped` set then);

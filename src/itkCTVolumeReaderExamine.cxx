@@ -43,11 +43,7 @@
 
 namespace itk {
 namespace {
-namespace fs = std::filesystem;
-using namespace detail;
-using CTReading::DescribeSeries;
-using CTReading::Refuse;
-using OutputImageType = CTVolumeReader::OutputImageType;
+using namespace CTReading;
 
 // The series to read among `series` (sorted by decreasing number of slices): the one whose
 // SeriesInstanceUID or unique series number is `identifier`, or without one the one with

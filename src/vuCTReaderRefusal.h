@@ -19,15 +19,21 @@
 #define vuCTReaderRefusal_h
 
 #include "itkCTVolumeReader.h"
+#include "vuCTInputFiles.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <sstream>
 #include <string>
 
 namespace itk {
-/** What CTVolumeReader's parts share: the refusal with a one-line message, and a series'
- * description in messages. */
+/** What CTVolumeReader's parts share: the input-file helpers, the refusal with a one-line
+ * message, and a series' description in messages. */
 namespace CTReading {
+namespace fs = std::filesystem;
+using namespace detail;
+using OutputImageType = CTVolumeReader::OutputImageType;
+
 /** Throws the message alone (no class name or address in the description) on one line,
  * so that the tool can print it as one readable line. */
 template <typename... TParts>

@@ -20,6 +20,7 @@
 
 #include "itkSheetMesh.h"
 
+#include <array>
 #include <cmath>
 #include <functional>
 
@@ -107,9 +108,9 @@ SpiralRollMesh(double innerRadius, double pitch, double turns, double spacing, d
     flat);
 }
 
-/** A spherical cap (non-developable) of radius R and opening half-angle alpha, as a grid. */
+/** An n x n grid mesh, point (row r, column c) at point(r, c), two triangles a cell. */
 inline itk::SheetMesh
-DomeMesh(double radius, double halfAngle, int n)
+SquareGridMesh(int n, const std::function<std::array<double, 3>(int, int)> & point)
 {
   itk::SheetMesh mesh;
   mesh.GridRows = n;
@@ -118,10 +119,8 @@ DomeMesh(double radius, double halfAngle, int n)
   {
     for (int c = 0; c < n; ++c)
     {
-      const double u = (2.0 * c / (n - 1) - 1.0) * halfAngle, v = (2.0 * r / (n - 1) - 1.0) * halfAngle;
-      mesh.Points.insert(
-        mesh.Points.end(),
-        { radius * std::sin(u) * std::cos(v), radius * std::sin(v), radius * std::cos(u) * std::cos(v) });
+      const std::array<double, 3> p = point(r, c);
+      mesh.Points.insert(mesh.Points.end(), p.begin(), p.end());
       mesh.GridIndex.insert(mesh.GridIndex.end(), { r, c });
     }
   }
@@ -134,6 +133,18 @@ DomeMesh(double radius, double halfAngle, int n)
     }
   }
   return mesh;
+}
+
+/** A spherical cap (non-developable) of radius R and opening half-angle alpha, as a grid. */
+inline itk::SheetMesh
+DomeMesh(double radius, double halfAngle, int n)
+{
+  return SquareGridMesh(n, [=](int r, int c) {
+    const double u = (2.0 * c / (n - 1) - 1.0) * halfAngle, v = (2.0 * r / (n - 1) - 1.0) * halfAngle;
+    return std::array<double, 3>{ radius * std::sin(u) * std::cos(v),
+                                  radius * std::sin(v),
+                                  radius * std::cos(u) * std::cos(v) };
+  });
 }
 } // namespace vu
 
