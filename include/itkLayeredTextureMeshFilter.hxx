@@ -131,10 +131,7 @@ LayeredTextureMeshFilter<TInputMesh, TImage, TOutputMesh>::GenerateData()
     pointData->InsertElement(it.Index(), static_cast<OutputPixelType>(values[i]));
   }
   output->SetPointData(pointData);
-  // The whole mesh is there: without this a mesh output looks outside its requested region
-  // to the pipeline (itk::PointSet's buffered region stays -1), and every later update
-  // downstream would run this filter again.
-  output->SetBufferedRegion(output->GetRequestedRegion());
+  MarkMeshWhole(output);
 }
 
 template <typename TInputMesh, typename TImage, typename TOutputMesh>

@@ -113,10 +113,7 @@ MassSpringFlatteningMeshFilter<TInputMesh, TOutputMesh>::GenerateData()
       output->SetPointData(id, static_cast<typename OutputMeshType::PixelType>(it.Value()));
     }
   }
-  // The whole mesh is there: without this a mesh output looks outside its requested region
-  // to the pipeline (itk::PointSet's buffered region stays -1), and every later update
-  // downstream would run this filter again.
-  output->SetBufferedRegion(output->GetRequestedRegion());
+  MarkMeshWhole(output);
   this->UpdateProgress(1.0f);
 }
 

@@ -184,6 +184,17 @@ SheetMeshIntoMesh(const SheetMesh & sheet, TMesh * mesh)
   }
 }
 
+/** Marks a filter's output mesh as holding all of itself (buffered region = requested
+ * region). Without it, itk::PointSet's buffered region stays -1, the pipeline takes the
+ * output as outside its requested region, and every later update downstream runs the
+ * filter again. Every mesh filter of the module calls it at the end of GenerateData. */
+template <typename TMesh>
+void
+MarkMeshWhole(TMesh * mesh)
+{
+  mesh->SetBufferedRegion(mesh->GetRequestedRegion());
+}
+
 /** Builds an itk::Mesh or itk::QuadEdgeMesh from plain arrays (see SheetMeshIntoMesh). */
 template <typename TMesh>
 typename TMesh::Pointer

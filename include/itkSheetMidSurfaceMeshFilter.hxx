@@ -223,10 +223,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   // Built in place: a QuadEdgeMesh must not share its cells with a temporary mesh (it
   // deletes them when it is destroyed).
   SheetMeshIntoMesh(m_SheetMesh, this->GetOutput());
-  // The whole mesh is there: without this a mesh output looks outside its requested region
-  // to the pipeline (itk::PointSet's buffered region stays -1), and every later update
-  // downstream would run this filter again.
-  this->GetOutput()->SetBufferedRegion(this->GetOutput()->GetRequestedRegion());
+  MarkMeshWhole(this->GetOutput());
   this->UpdateProgress(1.0f);
 }
 

@@ -48,7 +48,8 @@ struct SegmentOptions
   ReaderOptions Reader;
 };
 
-// "auto" or a number; anything else is the user's mistake.
+} // namespace
+
 bool
 ParseAutoOrNumber(const std::string & text, const std::string & option, double & value)
 {
@@ -72,7 +73,6 @@ ParseAutoOrNumber(const std::string & text, const std::string & option, double &
   return true;
 }
 
-} // namespace
 
 bool
 ParseMeshSpacing(const std::string & text, double spacing[2])

@@ -447,8 +447,15 @@ private:
 };
 
 // The options that can be checked before the long stages (their automatic values need the
-// scan and the mesh); the threshold, or NaN for automatic.
-double
+// scan and the mesh), and the threshold and mesh spacing as numbers.
+struct CheckedOptions
+{
+  bool   FixedThreshold{ false };
+  double Threshold{ 0.0 };
+  double MeshSpacing[2]{ 0.0, 0.0 }; // 0: automatic
+};
+
+CheckedOptions
 CheckUnwrapOptions(const UnwrapOptions & options)
 {
   if (fs::exists(options.Output) && !fs::is_directory(options.Output))
@@ -469,27 +476,10 @@ CheckUnwrapOptions(const UnwrapOptions & options)
   {
     throw UsageError("--side auto splits the layers at the focus: give an odd number of --layers");
   }
-  double meshSpacing[2];
-  ParseMeshSpacing(options.MeshSpacing, meshSpacing);
-  if (options.Threshold == "auto")
-  {
-    return std::numeric_limits<double>::quiet_NaN();
-  }
-  size_t used = 0;
-  double threshold = 0.0;
-  try
-  {
-    threshold = std::stod(options.Threshold, &used);
-  }
-  catch (const std::exception &)
-  {
-    used = 0;
-  }
-  if (used != options.Threshold.size() || !std::isfinite(threshold))
-  {
-    throw UsageError("--threshold must be a number or auto, not '" + options.Threshold + "'");
-  }
-  return threshold;
+  CheckedOptions checked;
+  checked.FixedThreshold = ParseAutoOrNumber(options.Threshold, "--threshold", checked.Threshold);
+  ParseMeshSpacing(options.MeshSpacing, checked.MeshSpacing);
+  return checked;
 }
 
 // A phantom's ground truth (virtual-unwrap phantom): the ink image and the text.
@@ -727,7 +717,7 @@ RunUnwrap(UnwrapOptions & options)
   StageClock               clock(progress);
   nlohmann::json           report;
   std::vector<std::string> warnings;
-  const double             threshold = CheckUnwrapOptions(options);
+  const CheckedOptions     checked = CheckUnwrapOptions(options);
   const GroundTruth        truth = ReadGroundTruth(options.GroundTruth);
 
   clock.Start("read", "reading " + options.Input);
@@ -737,8 +727,8 @@ RunUnwrap(UnwrapOptions & options)
   clock.Start("segment", "segmenting the sheet");
   auto segmentation = itk::SheetSegmentationImageFilter<VolumeType, MaskType>::New();
   segmentation->SetInput(scan.Filled.Volume);
-  segmentation->SetAutomaticThreshold(std::isnan(threshold));
-  segmentation->SetThreshold(std::isnan(threshold) ? 0.0 : threshold);
+  segmentation->SetAutomaticThreshold(!checked.FixedThreshold);
+  segmentation->SetThreshold(checked.Threshold);
   progress.Observe(segmentation);
   segmentation->Update();
   clock.End("segment");
@@ -748,10 +738,8 @@ RunUnwrap(UnwrapOptions & options)
   surfaceFilter->SetInput(segmentation->GetOutput());
   surfaceFilter->SetIntensityImage(scan.Filled.Volume);
   surfaceFilter->SetMethod(itk::SheetSurfaceMethodFromString(options.Method));
-  double meshSpacing[2] = { 0.0, 0.0 }; // automatic
-  ParseMeshSpacing(options.MeshSpacing, meshSpacing);
-  surfaceFilter->SetSpacingAlongSheet(meshSpacing[0]);
-  surfaceFilter->SetSpacingAlongAxis(meshSpacing[1]);
+  surfaceFilter->SetSpacingAlongSheet(checked.MeshSpacing[0]);
+  surfaceFilter->SetSpacingAlongAxis(checked.MeshSpacing[1]);
   progress.Observe(surfaceFilter);
   surfaceFilter->Update();
   Results results;
@@ -819,7 +807,7 @@ RunUnwrap(UnwrapOptions & options)
   // Measures: distortion, and against the ground truth when there is one.
   const itk::SheetMesh & surface = results.Surface;
   report["parameters"] = { { "threshold",
-                             { { "value", segmentation->GetThreshold() }, { "automatic", std::isnan(threshold) } } },
+                             { { "value", segmentation->GetThreshold() }, { "automatic", !checked.FixedThreshold } } },
                            { "mesh",
                              { { "method", itk::ToString(meshReport.Method) },
                                { "spacing_along_sheet_mm", meshReport.SpacingAlongSheet },

@@ -80,7 +80,12 @@ RegisterSegmentCommand(CLI::App & app);
 void
 RegisterUnwrapCommand(CLI::App & app);
 
-/** The mesh spacing of `segment`: "auto" (returns false), "MM" (both directions) or
+/** "auto" (returns false, `value` untouched) or a finite number (returns true); throws
+ * UsageError naming `option` for anything else. */
+bool
+ParseAutoOrNumber(const std::string & text, const std::string & option, double & value);
+
+/** The mesh spacing of `segment` and `unwrap`: "auto" (returns false), "MM" (both directions) or
  * "S,W" (along the sheet, along the roll axis). Throws UsageError for anything else or
  * a spacing that is not positive. */
 bool
