@@ -113,6 +113,7 @@ MassSpringSystem::SetParticles(const std::vector<double> & positions, const std:
   m_Stiffness.clear();
   m_AdjacencyValid = false;
   m_Solver->valid = false;
+  m_Solver->analysed = false;
   m_EnergyReferenceValid = false;
   m_Steps = 0;
   m_ForceEvaluations = 0;
@@ -137,6 +138,7 @@ MassSpringSystem::AddSpring(uint32_t i, uint32_t j, double restLength, double st
   m_Stiffness.push_back(stiffness);
   m_AdjacencyValid = false;
   m_Solver->valid = false;
+  m_Solver->analysed = false;
   m_EnergyReferenceValid = false;
 }
 
@@ -173,6 +175,7 @@ MassSpringSystem::SetLocked(uint32_t particle, bool locked)
   {
     m_Locked[particle] = locked;
     m_Solver->valid = false;
+    m_Solver->analysed = false;
     m_EnergyReferenceValid = false;
   }
   if (locked)
@@ -198,6 +201,7 @@ MassSpringSystem::UnlockAll()
   {
     std::fill(m_Locked.begin(), m_Locked.end(), 0);
     m_Solver->valid = false;
+    m_Solver->analysed = false;
     m_EnergyReferenceValid = false;
   }
 }

@@ -17,6 +17,7 @@
  *=========================================================================*/
 // MassSpringSystem's implicit (backward Euler) step and quasi-static relaxation.
 #include "itkMassSpringSystem.h"
+#include "vuBlasThreads.h"
 #include "vuImplicitSolver.h"
 
 #include "itkMacro.h"
@@ -31,6 +32,7 @@ void
 MassSpringSystem::StepImplicit(bool quasiStatic)
 {
   using SparseMatrix = ImplicitSolver::SparseMatrix;
+  const vu::SingleThreadedBlas blasOnThisThread;
   if (!m_AdjacencyValid)
   {
     BuildAdjacency();
@@ -79,9 +81,18 @@ MassSpringSystem::StepImplicit(bool quasiStatic)
     }
     SparseMatrix A(nf, nf);
     A.setFromTriplets(triplets.begin(), triplets.end());
-    solver.ldlt.compute(A);
-    if (solver.ldlt.info() != Eigen::Success)
+    if (!solver.analysed)
     {
+      solver.factorisation.analyzePattern(A);
+      solver.analysed = solver.factorisation.info() == Eigen::Success;
+    }
+    if (solver.analysed)
+    {
+      solver.factorisation.factorize(A);
+    }
+    if (!solver.analysed || solver.factorisation.info() != Eigen::Success)
+    {
+      solver.analysed = false;
       itkGenericExceptionMacro(<< "MassSpringSystem: factorisation of the implicit system failed");
     }
     solver.timeStep = h;
@@ -143,16 +154,24 @@ MassSpringSystem::StepImplicit(bool quasiStatic)
         rhs(r, 2) = b[2];
       }
     });
-    // A sheet lying on a coordinate plane (the final relaxation) has a zero column: skip it.
-    for (int d = 0; d < 3; ++d)
+    // A sheet lying on a coordinate plane (the final relaxation) has a zero column: skip it;
+    // otherwise the three columns are solved together (one pass over the factor).
+    if (!rhs.col(0).isZero(0.0) && !rhs.col(1).isZero(0.0) && !rhs.col(2).isZero(0.0))
     {
-      if (rhs.col(d).isZero(0.0))
+      solution = solver.factorisation.solve(rhs);
+    }
+    else
+    {
+      for (int d = 0; d < 3; ++d)
       {
-        solution.col(d).setZero();
-      }
-      else
-      {
-        solution.col(d) = solver.ldlt.solve(rhs.col(d));
+        if (rhs.col(d).isZero(0.0))
+        {
+          solution.col(d).setZero();
+        }
+        else
+        {
+          solution.col(d) = solver.factorisation.solve(rhs.col(d));
+        }
       }
     }
     for (Eigen::Index r = 0; r < nf; ++r)

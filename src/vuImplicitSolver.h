@@ -23,20 +23,34 @@
 #include "itk_eigen.h"
 #include ITK_EIGEN(Sparse)
 #include ITK_EIGEN(SparseCholesky)
+#ifdef VU_HAVE_CHOLMOD
+#  include ITK_EIGEN(CholmodSupport)
+#endif
 
 #include <cstdint>
 #include <vector>
 
 namespace itk {
-/** The implicit integrator's factorised system matrix and the particles it solves for. */
+/** The implicit integrator's factorised system matrix and the particles it solves for.
+ * The matrix (M / h^2 + L, symmetric positive definite) is factorised by SuiteSparse's
+ * CHOLMOD where the library was built with it (supernodal Cholesky, fill-reducing
+ * ordering chosen by CHOLMOD among AMD and METIS), otherwise by Eigen's simplicial LDL^T.
+ * The symbolic analysis depends only on which particles are free and which springs join
+ * them, so a new time step or stiffness refactorises the values alone. */
 struct MassSpringSystem::ImplicitSolver
 {
   using SparseMatrix = Eigen::SparseMatrix<double>;
-  Eigen::SimplicialLDLT<SparseMatrix> ldlt;
-  std::vector<int32_t>                freeIndex; // particle -> row, or -1 when locked
-  std::vector<uint32_t>               freeParticles;
-  double                              timeStep{ 0.0 };
-  bool                                valid{ false };
+#ifdef VU_HAVE_CHOLMOD
+  using Factorisation = Eigen::CholmodDecomposition<SparseMatrix, Eigen::Lower>;
+#else
+  using Factorisation = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower>;
+#endif
+  Factorisation         factorisation;
+  std::vector<int32_t>  freeIndex; // particle -> row, or -1 when locked
+  std::vector<uint32_t> freeParticles;
+  double                timeStep{ 0.0 };
+  bool                  valid{ false };    // the numeric factorisation matches the system
+  bool                  analysed{ false }; // the symbolic analysis matches the free set
   // Kept for the engine's lifetime: creating a threader per force loop costs more than a
   // small system's whole step.
   MultiThreaderBase::Pointer threader;
