@@ -180,11 +180,13 @@ public:
   const std::vector<double> &
   GetPositions() const
   {
+    SyncState();
     return m_X;
   }
   const std::vector<double> &
   GetVelocities() const
   {
+    SyncState();
     return m_V;
   }
   const std::vector<double> &
@@ -356,6 +358,24 @@ public:
   void
   SetNumberOfWorkUnits(unsigned int n);
 
+  /** Single precision for the explicit and symplectic Euler steps (without spring
+   * damping): the state is stepped in float, structure of arrays, with each spring computed
+   * once (vu::BandedSprings), about four times the double-precision loop's throughput on a
+   * grid-numbered sheet. Off by default. Positions in float carry an absolute error of
+   * about 6e-8 of the sheet's extent, so this suits the unrolling and interactive work,
+   * not strains below about 1e-5 on fine meshes (docs/flattening.md gives the measured
+   * difference from the double-precision trajectory). The double-precision state is
+   * brought up to date whenever it is read (GetPositions, the energies, a divergence
+   * check): with a check every step that costs a conversion per step, so raise
+   * SetDivergenceCheckInterval for long runs. */
+  void
+  SetSinglePrecision(bool on);
+  bool
+  GetSinglePrecision() const
+  {
+    return m_SinglePrecision;
+  }
+
 private:
   void
   BuildAdjacency();
@@ -367,6 +387,16 @@ private:
   RestingSpeed() const;
   void
   StepEulerFused(bool symplectic);
+  void
+  StepEulerSingle(bool symplectic);
+  bool
+  UsesSinglePrecisionStep() const;
+  /** Brings the double-precision state up to date with the single-precision one. */
+  void
+  SyncState() const;
+  /** The double-precision state changed: the single-precision copy must be reloaded. */
+  void
+  DoubleStateChanged();
   void
   CheckDivergence();
   void
@@ -380,11 +410,11 @@ private:
   std::string
   Describe() const;
 
-  // Particles (structure of arrays).
-  std::vector<double>  m_X;
-  std::vector<double>  m_V;
-  std::vector<double>  m_Masses;
-  std::vector<uint8_t> m_Locked;
+  // Particles (structure of arrays); mutable for SyncState().
+  mutable std::vector<double> m_X;
+  mutable std::vector<double> m_V;
+  std::vector<double>         m_Masses;
+  std::vector<uint8_t>        m_Locked;
 
   // Springs.
   std::vector<uint32_t> m_SpringI;
@@ -431,6 +461,11 @@ private:
   // Prefactored implicit system (Eigen lives only in the .cxx).
   struct ImplicitSolver;
   std::unique_ptr<ImplicitSolver> m_Solver;
+
+  // The single-precision state and banded springs of the float Euler step.
+  bool m_SinglePrecision{ false };
+  struct SinglePrecisionState;
+  std::unique_ptr<SinglePrecisionState> m_Single;
 };
 
 } // end namespace itk

@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "itkMassSpringSystem.h"
 #include "vuImplicitSolver.h"
+#include "vuSinglePrecisionState.h"
 
 #include "itkMacro.h"
 #include "itkMultiThreaderBase.h"
@@ -70,6 +71,7 @@ MassSpringIntegratorFromString(const std::string & name)
 
 MassSpringSystem::MassSpringSystem()
   : m_Solver(new ImplicitSolver)
+  , m_Single(new SinglePrecisionState)
 {}
 
 MassSpringSystem::~MassSpringSystem() = default;
@@ -103,6 +105,8 @@ MassSpringSystem::SetParticles(const std::vector<double> & positions, const std:
       itkGenericExceptionMacro(<< "MassSpringSystem: particle positions must be finite");
     }
   }
+  DoubleStateChanged();
+  m_Single->springsValid = false;
   m_X = positions;
   m_V.assign(positions.size(), 0.0);
   m_Masses = masses;
@@ -137,6 +141,7 @@ MassSpringSystem::AddSpring(uint32_t i, uint32_t j, double restLength, double st
   m_RestLength.push_back(restLength);
   m_Stiffness.push_back(stiffness);
   m_AdjacencyValid = false;
+  m_Single->springsValid = false;
   m_Solver->valid = false;
   m_Solver->analysed = false;
   m_EnergyReferenceValid = false;
@@ -149,6 +154,8 @@ MassSpringSystem::SetPositions(const std::vector<double> & positions)
   {
     itkGenericExceptionMacro(<< "MassSpringSystem: SetPositions needs " << m_X.size() << " coordinates");
   }
+  SyncState();
+  DoubleStateChanged();
   m_X = positions;
   m_EnergyReferenceValid = false;
 }
@@ -160,6 +167,8 @@ MassSpringSystem::SetVelocities(const std::vector<double> & velocities)
   {
     itkGenericExceptionMacro(<< "MassSpringSystem: SetVelocities needs " << m_V.size() << " components");
   }
+  SyncState();
+  DoubleStateChanged();
   m_V = velocities;
   m_EnergyReferenceValid = false;
 }
@@ -180,6 +189,8 @@ MassSpringSystem::SetLocked(uint32_t particle, bool locked)
   }
   if (locked)
   {
+    SyncState();
+    DoubleStateChanged();
     m_V[3 * particle] = m_V[3 * particle + 1] = m_V[3 * particle + 2] = 0.0;
   }
 }
@@ -317,23 +328,15 @@ MassSpringSystem::ParallelFor(size_t n, const std::function<void(size_t, size_t)
     body(0, n);
     return;
   }
-  if (m_Solver->threader.IsNull())
-  {
-    m_Solver->threader = MultiThreaderBase::New();
-    if (m_NumberOfWorkUnits > 0)
-    {
-      m_Solver->threader->SetMaximumNumberOfThreads(m_NumberOfWorkUnits);
-      m_Solver->threader->SetNumberOfWorkUnits(m_NumberOfWorkUnits);
-    }
-  }
-  m_Solver->threader->ParallelizeArray(
-    0,
-    chunks,
-    [&](SizeValueType c) {
-      const size_t begin = c * grain;
-      body(begin, std::min(n, begin + grain));
-    },
-    nullptr);
+  m_Solver->Threader(m_NumberOfWorkUnits)
+    ->ParallelizeArray(
+      0,
+      chunks,
+      [&](SizeValueType c) {
+        const size_t begin = c * grain;
+        body(begin, std::min(n, begin + grain));
+      },
+      nullptr);
 }
 
 namespace {
@@ -680,8 +683,14 @@ MassSpringSystem::Step()
   {
     itkGenericExceptionMacro(<< "MassSpringSystem: no particles");
   }
+  const bool single = UsesSinglePrecisionStep();
+  if (!single)
+  {
+    SyncState();
+  }
   if (!m_EnergyReferenceValid)
   {
+    SyncState();
     // Energy scale: what the springs, the motion and gravity across the system's extent can
     // hold; total energy may not grow beyond a multiple of it.
     double lo[3] = { m_X[0], m_X[1], m_X[2] }, hi[3] = { m_X[0], m_X[1], m_X[2] };
@@ -707,13 +716,21 @@ MassSpringSystem::Step()
                         1e-6 * (springScale + std::abs(m_InitialEnergy)) + std::numeric_limits<double>::min();
     m_EnergyReferenceValid = true;
   }
-  if (m_Integrator == MassSpringIntegratorEnum::ImplicitEuler)
+  if (single)
   {
-    StepImplicit(false);
+    StepEulerSingle(m_Integrator == MassSpringIntegratorEnum::SymplecticEuler);
   }
   else
   {
-    StepExplicit();
+    if (m_Integrator == MassSpringIntegratorEnum::ImplicitEuler)
+    {
+      StepImplicit(false);
+    }
+    else
+    {
+      StepExplicit();
+    }
+    DoubleStateChanged();
   }
   ++m_Steps;
   if (m_Steps % m_DivergenceCheckInterval == 0)

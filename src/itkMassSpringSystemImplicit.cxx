@@ -199,6 +199,8 @@ MassSpringSystem::Relax(unsigned int iterations)
   {
     itkGenericExceptionMacro(<< "MassSpringSystem: no particles");
   }
+  SyncState();
+  DoubleStateChanged();
   const unsigned int saved = m_ImplicitIterations;
   m_ImplicitIterations = iterations;
   try

@@ -30,6 +30,7 @@ namespace itk {
 double
 MassSpringSystem::ComputeKineticEnergy() const
 {
+  SyncState();
   double e = 0.0;
   for (size_t i = 0; i < m_Masses.size(); ++i)
   {
@@ -42,6 +43,7 @@ MassSpringSystem::ComputeKineticEnergy() const
 double
 MassSpringSystem::ComputeSpringEnergy() const
 {
+  SyncState();
   double e = 0.0;
   for (size_t s = 0; s < m_SpringI.size(); ++s)
   {
@@ -58,6 +60,7 @@ MassSpringSystem::ComputeSpringEnergy() const
 double
 MassSpringSystem::ComputeGravityEnergy() const
 {
+  SyncState();
   double e = 0.0;
   for (size_t i = 0; i < m_Masses.size(); ++i)
   {
@@ -112,6 +115,7 @@ MassSpringSystem::EstimateMaximumAngularFrequency() const
 double
 MassSpringSystem::ComputeRelativeResidualForce()
 {
+  SyncState();
   std::vector<double> zero(m_V.size(), 0.0), a(m_V.size());
   Accelerations(m_X.data(), zero.data(), a.data());
   --m_ForceEvaluations; // an analysis, not a simulation step
@@ -171,6 +175,7 @@ MassSpringSystem::Describe() const
 void
 MassSpringSystem::CheckDivergence()
 {
+  SyncState();
   for (size_t k = 0; k < m_X.size(); ++k)
   {
     if (!std::isfinite(m_X[k]) || !std::isfinite(m_V[k]))

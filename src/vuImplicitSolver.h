@@ -54,6 +54,21 @@ struct MassSpringSystem::ImplicitSolver
   // Kept for the engine's lifetime: creating a threader per force loop costs more than a
   // small system's whole step.
   MultiThreaderBase::Pointer threader;
+
+  MultiThreaderBase *
+  Threader(unsigned int workUnits)
+  {
+    if (threader.IsNull())
+    {
+      threader = MultiThreaderBase::New();
+      if (workUnits > 0)
+      {
+        threader->SetMaximumNumberOfThreads(workUnits);
+        threader->SetNumberOfWorkUnits(workUnits);
+      }
+    }
+    return threader.GetPointer();
+  }
 };
 } // end namespace itk
 
