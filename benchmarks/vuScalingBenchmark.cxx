@@ -22,7 +22,7 @@
 // with all threads. CSV on standard output (or --csv FILE). Sizes run in increasing order,
 // so the peak memory of a row is that of its size.
 //
-// Usage: vuScalingBenchmark [--sizes 10k,100k,1M,4M] [--csv FILE]
+// Usage: vuScalingBenchmark [--sizes 10k,100k,1M,4M] [--threads 1,2] [--csv FILE]
 #include "itkFlatteningDistortionCalculator.h"
 #include "itkMassSpringSheetFlattener.h"
 #include "itkMultiThreaderBase.h"
@@ -37,8 +37,9 @@
 int
 main(int argc, char * argv[])
 {
-  std::vector<std::string> sizes = { "10k", "100k", "1M", "4M" };
-  std::string              csvPath;
+  std::vector<std::string>  sizes = { "10k", "100k", "1M", "4M" };
+  std::string               csvPath;
+  std::vector<unsigned int> threadCounts = { 1u, itk::MultiThreaderBase::GetGlobalDefaultNumberOfThreads() };
   for (int a = 1; a < argc; ++a)
   {
     const std::string arg = argv[a];
@@ -50,9 +51,17 @@ main(int argc, char * argv[])
     {
       csvPath = argv[++a];
     }
+    else if (arg == "--threads" && a + 1 < argc)
+    {
+      threadCounts.clear();
+      for (const std::string & t : vu::SplitList(argv[++a]))
+      {
+        threadCounts.push_back(static_cast<unsigned int>(std::stoul(t)));
+      }
+    }
     else
     {
-      std::cerr << "usage: vuScalingBenchmark [--sizes 10k,100k,1M,4M] [--csv FILE]" << std::endl;
+      std::cerr << "usage: vuScalingBenchmark [--sizes 10k,100k,1M,4M] [--threads 1,2] [--csv FILE]" << std::endl;
       return 2;
     }
   }
@@ -74,7 +83,7 @@ main(int argc, char * argv[])
   {
     const std::string    name = "roll-" + size;
     const itk::SheetMesh mesh = vu::BenchmarkMesh(name);
-    for (unsigned int threads : { 1u, allThreads })
+    for (unsigned int threads : threadCounts)
     {
       itk::MultiThreaderBase::SetGlobalDefaultNumberOfThreads(threads);
       itk::MassSpringFlatteningParameters parameters;

@@ -147,11 +147,15 @@ def scaling():
     if not steps and not runs:
         return
     fig, (a, b, c) = plt.subplots(1, 3, figsize=(14, 4.2))
-    for threads in sorted({r["threads"] for r in steps}, key=int):
-        sel = sorted((r for r in steps if r["threads"] == threads), key=lambda r: int(r["particles"]))
+    series = sorted({(r.get("precision", "double"), r["threads"]) for r in steps}, key=lambda k: (k[0], int(k[1])))
+    for precision, threads in series:
+        sel = sorted((r for r in steps if (r.get("precision", "double"), r["threads"]) == (precision, threads)),
+                     key=lambda r: int(r["particles"]))
         x = [int(r["particles"]) for r in sel]
-        a.plot(x, [1e3 * float(r["seconds_per_step"]) for r in sel], "o-", label=f"{threads} thread(s)")
-        b.plot(x, [float(r["spring_evaluations_per_second"]) for r in sel], "o-", label=f"{threads} thread(s)")
+        label = f"{precision}, {threads} thread(s)"
+        style = "o-" if precision == "double" else "s--"
+        a.plot(x, [1e3 * float(r["seconds_per_step"]) for r in sel], style, label=label)
+        b.plot(x, [float(r["spring_evaluations_per_second"]) for r in sel], style, label=label)
     a.set_xscale("log")
     a.set_yscale("log")
     a.set_xlabel("particles")
