@@ -19,10 +19,12 @@
 
 #include "gtest/gtest.h"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <random>
+#include <vector>
 
 namespace {
 using LST = itk::LayerStackTexture;
@@ -480,4 +482,47 @@ TEST(LayerStackTexture, StrokeContrastFindsTheInkedSlabUnderNoise)
   EXPECT_GT(Correlation(slab, truth), 0.8);
   EXPECT_GT(bestScore, 1.5 * LST::StrokeContrast(LST::Smooth(LST::LayerWindow(stack, 0, 3), 0.5), 0.5));
   EXPECT_THROW(LST::StrokeContrast(slab, 0.0), itk::ExceptionObject);
+}
+
+TEST(LayerStackTexture, MedianEqualsTheMedianOfEachWindow)
+{
+  // Random values with holes off the sheet, 3 x 3 and 5 x 5 windows: every pixel equals the
+  // median of the finite values of its window (the mean of the middle two for an even count).
+  std::mt19937                          random(7);
+  std::uniform_real_distribution<float> value(0.0f, 1.0f);
+  const auto                            texture = MakeTexture(37, 23, 0.5, [&](unsigned x, unsigned y) {
+    const float v = value(random);
+    return (x * 5 + y * 3) % 13 == 0 || x + y < 3 ? NaN : v;
+  });
+  for (const double radius : { 0.5, 1.0 })
+  {
+    const auto result = LST::Median(texture, radius);
+    const long half = std::lround(radius / 0.5);
+    for (long y = 0; y < 23; ++y)
+    {
+      for (long x = 0; x < 37; ++x)
+      {
+        if (!std::isfinite(At(texture, x, y)))
+        {
+          EXPECT_FALSE(std::isfinite(At(result, x, y)));
+          continue;
+        }
+        std::vector<float> window;
+        for (long v = std::max(0L, y - half); v <= std::min(22L, y + half); ++v)
+        {
+          for (long u = std::max(0L, x - half); u <= std::min(36L, x + half); ++u)
+          {
+            if (std::isfinite(At(texture, u, v)))
+            {
+              window.push_back(At(texture, u, v));
+            }
+          }
+        }
+        std::sort(window.begin(), window.end());
+        const size_t n = window.size();
+        const float  expected = n % 2 == 1 ? window[n / 2] : 0.5f * (window[n / 2 - 1] + window[n / 2]);
+        ASSERT_FLOAT_EQ(At(result, x, y), expected) << "radius " << radius << " at " << x << ", " << y;
+      }
+    }
+  }
 }
