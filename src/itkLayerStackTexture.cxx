@@ -383,30 +383,34 @@ LayerStackTexture::Smooth(const TextureType * texture, double sigma)
     {
       kernel[r + radius] = std::exp(-0.5 * r * r / (s * s));
     }
-    const long          length = static_cast<long>(size[d]);
-    const size_t        stride = d == 0 ? 1 : size[0];
-    const size_t        lines = d == 0 ? size[1] : size[0];
-    std::vector<double> v(length), w(length);
-    for (size_t line = 0; line < lines; ++line)
-    {
-      const size_t first = d == 0 ? line * size[0] : line;
-      for (long i = 0; i < length; ++i)
-      {
-        v[i] = value[first + i * stride];
-        w[i] = weight[first + i * stride];
-      }
-      for (long i = 0; i < length; ++i)
-      {
-        double sv = 0.0, sw = 0.0;
-        for (long r = std::max(-radius, -i); r <= std::min(radius, length - 1 - i); ++r)
+    const long   length = static_cast<long>(size[d]);
+    const size_t stride = d == 0 ? 1 : size[0];
+    const size_t lines = d == 0 ? size[1] : size[0];
+    // Lines in parallel, each on its own copy of its values.
+    MultiThreaderBase::New()->ParallelizeArray(
+      0,
+      lines,
+      [&](SizeValueType line) {
+        std::vector<double> v(length), w(length);
+        const size_t        first = d == 0 ? line * size[0] : line;
+        for (long i = 0; i < length; ++i)
         {
-          sv += kernel[r + radius] * v[i + r];
-          sw += kernel[r + radius] * w[i + r];
+          v[i] = value[first + i * stride];
+          w[i] = weight[first + i * stride];
         }
-        value[first + i * stride] = sv;
-        weight[first + i * stride] = sw;
-      }
-    }
+        for (long i = 0; i < length; ++i)
+        {
+          double sv = 0.0, sw = 0.0;
+          for (long r = std::max(-radius, -i); r <= std::min(radius, length - 1 - i); ++r)
+          {
+            sv += kernel[r + radius] * v[i + r];
+            sw += kernel[r + radius] * w[i + r];
+          }
+          value[first + i * stride] = sv;
+          weight[first + i * stride] = sw;
+        }
+      },
+      nullptr);
   }
   for (size_t k = 0; k < n; ++k)
   {
