@@ -95,7 +95,6 @@ MassSpringSystem::StepImplicit(bool quasiStatic)
       solver.analysed = false;
       itkGenericExceptionMacro(<< "MassSpringSystem: factorisation of the implicit system failed");
     }
-    solver.timeStep = h;
     solver.valid = true;
   }
 

@@ -88,16 +88,6 @@ public:
             size_t              begin,
             size_t              end) const;
 
-  size_t
-  GetNumberOfBands() const
-  {
-    return m_Bands.size();
-  }
-  size_t
-  GetNumberOfGatheredSprings() const
-  {
-    return m_Extra.size() / 2;
-  }
   /** Ranges shorter than this are not worth a thread of their own. */
   size_t
   GetMinimumRange() const

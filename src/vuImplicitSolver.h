@@ -48,7 +48,6 @@ struct MassSpringSystem::ImplicitSolver
   Factorisation         factorisation;
   std::vector<int32_t>  freeIndex; // particle -> row, or -1 when locked
   std::vector<uint32_t> freeParticles;
-  double                timeStep{ 0.0 };
   bool                  valid{ false };    // the numeric factorisation matches the system
   bool                  analysed{ false }; // the symbolic analysis matches the free set
   // Kept for the engine's lifetime: creating a threader per force loop costs more than a
