@@ -171,6 +171,8 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
   unsigned int        CoarseningFactor{ 1 };
   double              Gravity{ 0.0 };
   double              Damping{ 0.0 };
+  /** Time for the sheet to fall its own length under the simulation's gravity (s). */
+  double              FallTime{ 0.0 };
   uint64_t            SpringEvaluations{ 0 };
   double              Seconds{ 0.0 };
 };
@@ -234,6 +236,52 @@ public:
     m_Callback = std::move(callback);
   }
 
+  /** Decides when the unroll and flatten phases end: called every ten steps with whether
+   * the phase has converged (at rest, small residual force); returning true ends the phase.
+   * Unset, a phase ends when it converges. With MaximumStepsPerPhase raised, an
+   * interactive program keeps a sheet hanging for as long as the user wants. */
+  using PhaseEndCallback = std::function<bool(SheetFlatteningPhaseEnum phase, bool converged)>;
+  void
+  SetPhaseEndCallback(PhaseEndCallback callback)
+  {
+    m_PhaseEnd = std::move(callback);
+  }
+
+  /** Starts the next Flatten from a saved state of the simulated particles (positions and
+   * velocities, 3 per particle, as the step callback saw them) at the start of `phase`
+   * (Unroll, or Flatten to skip the unroll): a run resumed from its last stable state
+   * after a divergence. The rest lengths still come from the surface. */
+  void
+  SetInitialState(SheetFlatteningPhaseEnum    phase,
+                  const std::vector<double> & positions,
+                  const std::vector<double> & velocities);
+  void
+  ClearInitialState()
+  {
+    m_InitialPositions.clear();
+    m_InitialVelocities.clear();
+  }
+
+  /** The time step chosen when TimeStep is 0: implicit Euler FallTime / StepsPerFallTime,
+   * explicit integrators TimeStepSafety times their stability bound over the system's
+   * largest angular frequency (2.83 for RK4, 2 for the others). */
+  static double
+  AutomaticTimeStep(const MassSpringSystem &               system,
+                    MassSpringIntegratorEnum               integrator,
+                    const MassSpringFlatteningParameters & parameters,
+                    double                                 fallTime);
+
+  /** The particles of a grid mesh's end column (OuterEdge: the end farther from the roll's
+   * axis; InnerEdge: the nearer one), one per row. Throws for other meshes or edges. */
+  static std::vector<uint32_t>
+  EdgeParticles(const SheetMesh & mesh, SheetLockedEdgeEnum edge);
+
+  /** The paper's impulse that makes a hanging sheet wave: adds to every free particle a
+   * velocity along the sheet's normal (its least principal axis), growing linearly from 0
+   * at the locked particles' centroid to `speed` at the particle farthest from it. */
+  static void
+  ApplyWave(MassSpringSystem & system, double speed);
+
   /** Flattens the sheet; returns the flat mesh (same points and triangles, z = 0). */
   SheetMesh
   Flatten(const SheetMesh & surface);
@@ -253,6 +301,10 @@ private:
   MassSpringFlatteningParameters m_Parameters;
   MassSpringFlatteningReport     m_Report;
   StepCallback                   m_Callback;
+  PhaseEndCallback               m_PhaseEnd;
+  SheetFlatteningPhaseEnum       m_InitialPhase{ SheetFlatteningPhaseEnum::Unroll };
+  std::vector<double>            m_InitialPositions;
+  std::vector<double>            m_InitialVelocities;
 };
 
 } // end namespace itk

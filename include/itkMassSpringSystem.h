@@ -253,6 +253,19 @@ public:
   {
     return m_HasPlane;
   }
+  /** Restitution k_r of the collision plane, in [0, 1] (changeable between steps). */
+  void
+  SetRestitution(double restitution);
+  double
+  GetRestitution() const
+  {
+    return m_Restitution;
+  }
+
+  /** Multiplies every spring's stiffness by factor > 0 (between steps; the sparse
+   * factorisation of the implicit solver is redone, its analysis kept). */
+  void
+  ScaleStiffnesses(double factor);
 
   void
   SetIntegrator(MassSpringIntegratorEnum integrator)

@@ -83,6 +83,15 @@ struct VirtualUnwrapping_EXPORT SheetMesh
    * triangles, or opposing triangles that cancel) gets (0, 0, 0). */
   std::vector<double>
   ComputeVertexNormals() const;
+
+  /** A grid mesh laid out on its grid, a first flat guess before any simulation: point
+   * (row r, column c) at (u, v, 0) with u its arc length along row r from the row's first
+   * point and v = r times the mean distance between neighbouring rows. Exact for sheets
+   * bent about the roll axis only (a cylinder, a spiral of constant width); used to map a
+   * texture onto a sheet not yet flattened. Same points and triangles. Throws for meshes
+   * without a grid. */
+  SheetMesh
+  ComputeGridLayout() const;
 };
 
 /** True when both meshes have the same number of points and identical triangles. */

@@ -265,11 +265,12 @@ MassSpringSheetFlattener::BuildSystem(const SheetMesh &                      mes
 namespace {
 // Runs one phase until converged or at the step limit; records it in the report.
 MassSpringFlatteningReport::Phase
-RunPhase(MassSpringSystem &                             system,
-         SheetFlatteningPhaseEnum                       name,
-         const MassSpringFlatteningParameters &         parameters,
-         const MassSpringSheetFlattener::StepCallback & callback,
-         const std::function<bool()> &                  settled = {})
+RunPhase(MassSpringSystem &                                 system,
+         SheetFlatteningPhaseEnum                           name,
+         const MassSpringFlatteningParameters &             parameters,
+         const MassSpringSheetFlattener::StepCallback &     callback,
+         const MassSpringSheetFlattener::PhaseEndCallback & phaseEnd,
+         const std::function<bool()> &                      settled = {})
 {
   MassSpringFlatteningReport::Phase phase;
   phase.Name = name;
@@ -295,14 +296,16 @@ RunPhase(MassSpringSystem &                             system,
     {
       phase.RelativeKineticEnergy = system.ComputeRelativeKineticEnergy();
       restingChecks = phase.RelativeKineticEnergy < parameters.KineticEnergyTolerance ? restingChecks + 1 : 0;
+      bool converged = false;
       if (restingChecks >= restingChecksNeeded && (!settled || settled()))
       {
         phase.RelativeResidualForce = system.ComputeRelativeResidualForce();
-        if (phase.RelativeResidualForce < parameters.ResidualForceTolerance)
-        {
-          phase.StopReason = "converged";
-          break;
-        }
+        converged = phase.RelativeResidualForce < parameters.ResidualForceTolerance;
+      }
+      if (phaseEnd ? phaseEnd(name, converged) : converged)
+      {
+        phase.StopReason = converged ? "converged" : "ended by the caller";
+        break;
       }
     }
   }
@@ -426,7 +429,7 @@ NormaliseFlatFrame(SheetMesh & flat)
 
 // The particles of a grid mesh held by the unroll phase: the end column of each row.
 std::vector<uint32_t>
-EdgeParticles(const SheetMesh & mesh, SheetLockedEdgeEnum edge)
+GridEdgeParticles(const SheetMesh & mesh, SheetLockedEdgeEnum edge)
 {
   if (!mesh.IsGridStructured())
   {
@@ -551,7 +554,7 @@ HeldParticles(const MassSpringFlatteningParameters & p,
   }
   else if (p.LockedEdge != SheetLockedEdgeEnum::None)
   {
-    locked = EdgeParticles(simulated, p.LockedEdge);
+    locked = GridEdgeParticles(simulated, p.LockedEdge);
   }
   return locked;
 }
@@ -681,29 +684,35 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   system.SetDamping(damping);
   system.SetSpringDamping(p.SpringDamping);
   system.SetIntegrator(p.Integrator);
-  double timeStep = p.TimeStep;
-  if (timeStep <= 0.0)
+  m_Report.FallTime = fallTime;
+  system.SetTimeStep(p.TimeStep > 0.0 ? p.TimeStep : AutomaticTimeStep(system, p.Integrator, p, fallTime));
+
+  // A run resumed from a saved state.
+  bool resumedAfterUnroll = false;
+  if (!m_InitialPositions.empty())
   {
-    if (p.Integrator == MassSpringIntegratorEnum::ImplicitEuler)
+    if (m_InitialPositions.size() != 3 * system.GetNumberOfParticles() ||
+        (!m_InitialVelocities.empty() && m_InitialVelocities.size() != m_InitialPositions.size()))
     {
-      timeStep = fallTime / p.StepsPerFallTime;
+      itkGenericExceptionMacro(<< "mass-spring flattening: the initial state holds " << m_InitialPositions.size() / 3
+                               << " particles, the simulated sheet " << system.GetNumberOfParticles());
     }
-    else
+    system.SetPositions(m_InitialPositions);
+    if (!m_InitialVelocities.empty())
     {
-      const double bound = p.Integrator == MassSpringIntegratorEnum::RungeKutta4 ? 2.83 : 2.0;
-      timeStep = p.TimeStepSafety * bound / system.EstimateMaximumAngularFrequency();
+      system.SetVelocities(m_InitialVelocities);
     }
+    resumedAfterUnroll = m_InitialPhase != SheetFlatteningPhaseEnum::Unroll;
   }
-  system.SetTimeStep(timeStep);
 
   // 1. Unroll: hold the edge, gravity across it towards the sheet.
-  if (!locked.empty())
+  if (!locked.empty() && !resumedAfterUnroll)
   {
     system.SetLockedParticles(locked);
     const Vec3 down = HangingDirection(system, locked, extent);
     system.SetGravity({ gravity * down.x(), gravity * down.y(), gravity * down.z() });
     auto planar = [&system, &p, &simulated]() { return HangsFlat(system, simulated, p.PlanarityTolerance); };
-    m_Report.Phases.push_back(RunPhase(system, SheetFlatteningPhaseEnum::Unroll, p, m_Callback, planar));
+    m_Report.Phases.push_back(RunPhase(system, SheetFlatteningPhaseEnum::Unroll, p, m_Callback, m_PhaseEnd, planar));
   }
 
   // 2. Flatten: a plane under the sheet, gravity towards it, nothing held.
@@ -721,7 +730,7 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
     system.SetCollisionPlane(
       { planePoint.x(), planePoint.y(), planePoint.z() }, { normal.x(), normal.y(), normal.z() }, p.Restitution);
     system.SetGravity({ -gravity * normal.x(), -gravity * normal.y(), -gravity * normal.z() });
-    m_Report.Phases.push_back(RunPhase(system, SheetFlatteningPhaseEnum::Flatten, p, m_Callback));
+    m_Report.Phases.push_back(RunPhase(system, SheetFlatteningPhaseEnum::Flatten, p, m_Callback, m_PhaseEnd));
 
     // 3. Relax on the plane, expressed in its own coordinates.
     system.SetPositions(ToPlane(system.GetPositions(), planePoint, axes.col(0), axes.col(1)));
@@ -750,6 +759,96 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   NormaliseFlatFrame(flat);
   m_Report.Seconds = Seconds(start);
   return flat;
+}
+
+double
+MassSpringSheetFlattener::AutomaticTimeStep(const MassSpringSystem &               system,
+                                            MassSpringIntegratorEnum               integrator,
+                                            const MassSpringFlatteningParameters & parameters,
+                                            double                                 fallTime)
+{
+  if (integrator == MassSpringIntegratorEnum::ImplicitEuler)
+  {
+    return fallTime / parameters.StepsPerFallTime;
+  }
+  const double bound = integrator == MassSpringIntegratorEnum::RungeKutta4 ? 2.83 : 2.0;
+  return parameters.TimeStepSafety * bound / system.EstimateMaximumAngularFrequency();
+}
+
+std::vector<uint32_t>
+MassSpringSheetFlattener::EdgeParticles(const SheetMesh & mesh, SheetLockedEdgeEnum edge)
+{
+  if (edge != SheetLockedEdgeEnum::OuterEdge && edge != SheetLockedEdgeEnum::InnerEdge)
+  {
+    itkGenericExceptionMacro(<< "EdgeParticles: the edge must be outer or inner, not " << ToString(edge));
+  }
+  return GridEdgeParticles(mesh, edge);
+}
+
+void
+MassSpringSheetFlattener::SetInitialState(SheetFlatteningPhaseEnum    phase,
+                                          const std::vector<double> & positions,
+                                          const std::vector<double> & velocities)
+{
+  if (phase != SheetFlatteningPhaseEnum::Unroll && phase != SheetFlatteningPhaseEnum::Flatten)
+  {
+    itkGenericExceptionMacro(<< "mass-spring flattening: a run resumes in the unroll or flatten phase, not "
+                             << ToString(phase));
+  }
+  if (positions.empty() || positions.size() % 3 != 0 ||
+      !std::all_of(positions.begin(), positions.end(), [](double c) { return std::isfinite(c); }))
+  {
+    itkGenericExceptionMacro(<< "mass-spring flattening: an initial state needs 3 finite coordinates per particle");
+  }
+  m_InitialPhase = phase;
+  m_InitialPositions = positions;
+  m_InitialVelocities = velocities;
+}
+
+void
+MassSpringSheetFlattener::ApplyWave(MassSpringSystem & system, double speed)
+{
+  const size_t n = system.GetNumberOfParticles();
+  if (n == 0 || !std::isfinite(speed))
+  {
+    return;
+  }
+  Vec3                  centroid;
+  const Eigen::Matrix3d axes = PrincipalAxes(system.GetPositions(), centroid);
+  const Vec3            normal = axes.col(2);
+  // Distances from the held particles' centroid (the sheet's, when nothing is held).
+  Vec3   anchor = Vec3::Zero();
+  size_t held = 0;
+  for (size_t i = 0; i < n; ++i)
+  {
+    if (system.IsLocked(static_cast<uint32_t>(i)))
+    {
+      anchor += PointOf(system.GetPositions(), i);
+      ++held;
+    }
+  }
+  anchor = held > 0 ? Vec3(anchor / static_cast<double>(held)) : centroid;
+  std::vector<double> distance(n);
+  double              farthest = 0.0;
+  for (size_t i = 0; i < n; ++i)
+  {
+    distance[i] = (PointOf(system.GetPositions(), i) - anchor).norm();
+    farthest = std::max(farthest, distance[i]);
+  }
+  std::vector<double> v = system.GetVelocities();
+  for (size_t i = 0; i < n; ++i)
+  {
+    if (system.IsLocked(static_cast<uint32_t>(i)))
+    {
+      continue;
+    }
+    const double s = held > 0 && farthest > 0.0 ? speed * distance[i] / farthest : speed;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      v[3 * i + d] += s * normal[d];
+    }
+  }
+  system.SetVelocities(v);
 }
 
 } // end namespace itk

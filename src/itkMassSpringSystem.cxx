@@ -263,6 +263,34 @@ MassSpringSystem::SetCollisionPlane(const Vector3 & point, const Vector3 & norma
 }
 
 void
+MassSpringSystem::SetRestitution(double restitution)
+{
+  if (!(restitution >= 0.0 && restitution <= 1.0))
+  {
+    itkGenericExceptionMacro(<< "MassSpringSystem: restitution must lie in [0, 1], got " << restitution);
+  }
+  m_Restitution = restitution;
+}
+
+void
+MassSpringSystem::ScaleStiffnesses(double factor)
+{
+  if (!(factor > 0.0) || !std::isfinite(factor))
+  {
+    itkGenericExceptionMacro(<< "MassSpringSystem: a stiffness factor must be a finite number > 0, got " << factor);
+  }
+  SyncState();
+  for (double & k : m_Stiffness)
+  {
+    k *= factor;
+  }
+  m_AdjacencyValid = false;
+  m_Single->springsValid = false;
+  m_Solver->valid = false;
+  m_EnergyReferenceValid = false;
+}
+
+void
 MassSpringSystem::SetTimeStep(double h)
 {
   if (!(h > 0.0) || !std::isfinite(h))

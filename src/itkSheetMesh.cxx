@@ -173,4 +173,66 @@ HaveSameTopology(const SheetMesh & a, const SheetMesh & b)
   return a.GetNumberOfPoints() == b.GetNumberOfPoints() && a.Triangles == b.Triangles;
 }
 
+SheetMesh
+SheetMesh::ComputeGridLayout() const
+{
+  if (!IsGridStructured() || GridRows < 1 || GridColumns < 1)
+  {
+    itkGenericExceptionMacro(<< "SheetMesh::ComputeGridLayout: the mesh has no grid");
+  }
+  const size_t         rows = static_cast<size_t>(GridRows), columns = static_cast<size_t>(GridColumns);
+  std::vector<int64_t> at(rows * columns, -1);
+  for (size_t i = 0; i < GetNumberOfPoints(); ++i)
+  {
+    at[static_cast<size_t>(GridIndex[2 * i]) * columns + static_cast<size_t>(GridIndex[2 * i + 1])] =
+      static_cast<int64_t>(i);
+  }
+  auto distance = [this](int64_t a, int64_t b) {
+    double sum = 0.0;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      const double e = Points[3 * a + d] - Points[3 * b + d];
+      sum += e * e;
+    }
+    return std::sqrt(sum);
+  };
+  double rowStep = 0.0;
+  size_t rowSteps = 0;
+  for (size_t r = 0; r + 1 < rows; ++r)
+  {
+    for (size_t c = 0; c < columns; ++c)
+    {
+      if (at[r * columns + c] >= 0 && at[(r + 1) * columns + c] >= 0)
+      {
+        rowStep += distance(at[r * columns + c], at[(r + 1) * columns + c]);
+        ++rowSteps;
+      }
+    }
+  }
+  rowStep = rowSteps > 0 ? rowStep / static_cast<double>(rowSteps) : 1.0;
+  SheetMesh layout = *this;
+  for (size_t r = 0; r < rows; ++r)
+  {
+    double  u = 0.0;
+    int64_t previous = -1;
+    for (size_t c = 0; c < columns; ++c)
+    {
+      const int64_t i = at[r * columns + c];
+      if (i < 0)
+      {
+        continue;
+      }
+      if (previous >= 0)
+      {
+        u += distance(previous, i);
+      }
+      layout.Points[3 * i] = u;
+      layout.Points[3 * i + 1] = static_cast<double>(r) * rowStep;
+      layout.Points[3 * i + 2] = 0.0;
+      previous = i;
+    }
+  }
+  return layout;
+}
+
 } // end namespace itk

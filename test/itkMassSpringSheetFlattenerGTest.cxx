@@ -240,3 +240,105 @@ TEST(MassSpringSheetFlattener, RejectsBadInput)
   EXPECT_THROW(itk::SheetLockedEdgeFromString("middle"), itk::ExceptionObject);
   EXPECT_EQ(itk::SheetLockedEdgeFromString("outer"), itk::SheetLockedEdgeEnum::OuterEdge);
 }
+
+// What an interactive program needs: a phase that ends when the caller says, the held
+// edge found in one call, a wave, and a run resumed from a saved state.
+TEST(MassSpringSheetFlattener, CallerEndsThePhasesAndResumesASavedState)
+{
+  using Phase = itk::SheetFlatteningPhaseEnum;
+  const itk::SheetMesh surface = vu::SpiralRollMesh(10.0, 4.0, 2.0, 4.0, 20.0, nullptr);
+  const auto           outer = itk::MassSpringSheetFlattener::EdgeParticles(surface, itk::SheetLockedEdgeEnum::OuterEdge);
+  const auto           inner = itk::MassSpringSheetFlattener::EdgeParticles(surface, itk::SheetLockedEdgeEnum::InnerEdge);
+  ASSERT_EQ(outer.size(), static_cast<size_t>(surface.GridRows));
+  ASSERT_EQ(inner.size(), outer.size());
+  EXPECT_NE(outer, inner);
+  EXPECT_THROW(itk::MassSpringSheetFlattener::EdgeParticles(surface, itk::SheetLockedEdgeEnum::Auto),
+               itk::ExceptionObject);
+
+  itk::MassSpringFlatteningParameters parameters;
+  parameters.LockedEdge = itk::SheetLockedEdgeEnum::Custom;
+  parameters.LockedParticles = outer;
+  parameters.MaximumStepsPerPhase = 100000;
+  itk::MassSpringSheetFlattener flattener;
+  flattener.SetParameters(parameters);
+  // The unroll phase lasts exactly 400 steps although it converges earlier; the state at
+  // step 200 is saved.
+  uint64_t            unrollSteps = 0;
+  std::vector<double> saved, savedVelocities;
+  flattener.SetStepCallback([&](itk::MassSpringSystem & system, Phase phase, uint64_t step) {
+    if (phase == Phase::Unroll)
+    {
+      unrollSteps = step;
+      if (step == 200)
+      {
+        saved = system.GetPositions();
+        savedVelocities = system.GetVelocities();
+      }
+    }
+    return true;
+  });
+  flattener.SetPhaseEndCallback(
+    [&](Phase phase, bool converged) { return phase == Phase::Unroll ? unrollSteps >= 400 : converged; });
+  const itk::SheetMesh flat = flattener.Flatten(surface);
+  EXPECT_EQ(unrollSteps, 400u);
+  EXPECT_EQ(flattener.GetReport().Phases.front().Steps, 400u);
+  const double p95 = Measure(surface, flat)->GetEdgeStrainP95();
+  EXPECT_LE(p95, 0.005);
+
+  // Resumed from step 200 of the unroll: the unroll restarts there (its first step moves
+  // the saved state, not the rolled sheet), and the result is as good.
+  flattener.SetInitialState(Phase::Unroll, saved, savedVelocities);
+  bool firstStepChecked = false;
+  flattener.SetStepCallback([&](itk::MassSpringSystem & system, Phase phase, uint64_t step) {
+    if (phase == Phase::Unroll && step == 1)
+    {
+      double moved = 0.0;
+      for (size_t k = 0; k < saved.size(); ++k)
+      {
+        moved = std::max(moved, std::abs(system.GetPositions()[k] - saved[k]));
+      }
+      EXPECT_LT(moved, 0.5) << "the run did not start from the saved state";
+      firstStepChecked = true;
+    }
+    unrollSteps = phase == Phase::Unroll ? step : unrollSteps;
+    return true;
+  });
+  // Ended after ten steps, before three checks in a row could find it at rest.
+  flattener.SetPhaseEndCallback(
+    [&](Phase phase, bool converged) { return phase == Phase::Unroll ? unrollSteps >= 10 : converged; });
+  const itk::SheetMesh resumed = flattener.Flatten(surface);
+  EXPECT_TRUE(firstStepChecked);
+  EXPECT_EQ(flattener.GetReport().Phases.front().StopReason, "ended by the caller");
+  EXPECT_LE(Measure(surface, resumed)->GetEdgeStrainP95(), 0.005);
+  // A flatten-phase resume skips the unroll.
+  flattener.SetInitialState(Phase::Flatten, saved, {});
+  flattener.Flatten(surface);
+  EXPECT_EQ(flattener.GetReport().Phases.front().Name, Phase::Flatten);
+  flattener.ClearInitialState();
+  EXPECT_THROW(flattener.SetInitialState(Phase::Relax, saved, {}), itk::ExceptionObject);
+  flattener.SetInitialState(Phase::Unroll, std::vector<double>(9, 0.0), {});
+  EXPECT_THROW(flattener.Flatten(surface), itk::ExceptionObject);
+}
+
+TEST(MassSpringSheetFlattener, WaveMovesOnlyFreeParticlesAlongTheNormal)
+{
+  const itk::SheetMesh surface = vu::SquareGridMesh(6, [](int r, int c) {
+    return std::array<double, 3>{ { 2.0 * c, 2.0 * r, 0.0 } };
+  });
+  itk::MassSpringSystem               system;
+  itk::MassSpringFlatteningParameters parameters;
+  itk::MassSpringSheetFlattener::BuildSystem(surface, parameters, system);
+  system.SetLocked(0, true);
+  itk::MassSpringSheetFlattener::ApplyWave(system, 3.0);
+  const auto & v = system.GetVelocities();
+  EXPECT_EQ(v[0], 0.0);
+  EXPECT_EQ(v[2], 0.0);
+  double fastest = 0.0;
+  for (size_t i = 1; i < system.GetNumberOfParticles(); ++i)
+  {
+    EXPECT_NEAR(v[3 * i], 0.0, 1e-12);
+    EXPECT_NEAR(v[3 * i + 1], 0.0, 1e-12);
+    fastest = std::max(fastest, std::abs(v[3 * i + 2]));
+  }
+  EXPECT_NEAR(fastest, 3.0, 1e-9);
+}

@@ -110,6 +110,32 @@ TEST(MassSpringSystem, SpringForceFollowsHookesLaw)
   EXPECT_NEAR(system.EstimateMaximumAngularFrequency(), std::sqrt(20.0), 1e-12);
 }
 
+// Stiffness and restitution changed between steps, as an interactive program does.
+TEST(MassSpringSystem, StiffnessScaledAndRestitutionChangedBetweenSteps)
+{
+  MassSpringSystem system;
+  system.SetParticles({ 0, 0, 0, 1.5, 0, 0 }, { 1.0, 2.0 });
+  system.AddSpring(0, 1, 1.0, 10.0);
+  system.ScaleStiffnesses(3.0);
+  EXPECT_NEAR(system.ComputeSpringEnergy(), 3.0 * 0.5 * 10.0 * 0.25, 1e-12);
+  EXPECT_NEAR(system.GetSpringStiffnesses()[0], 30.0, 1e-12);
+  // The implicit solver sees the new stiffness: a step of the stiffer spring moves more.
+  system.SetIntegrator(itk::MassSpringIntegratorEnum::ImplicitEuler);
+  system.SetTimeStep(0.01);
+  system.Step();
+  const double stiffMove = system.GetPositions()[3] - 1.5;
+  system.SetPositions({ 0, 0, 0, 1.5, 0, 0 });
+  system.SetVelocities(std::vector<double>(6, 0.0));
+  system.ScaleStiffnesses(1.0 / 3.0);
+  system.Step();
+  EXPECT_LT(stiffMove, 1.5 * (system.GetPositions()[3] - 1.5));
+  EXPECT_THROW(system.ScaleStiffnesses(0.0), itk::ExceptionObject);
+  EXPECT_THROW(system.ScaleStiffnesses(std::nan("")), itk::ExceptionObject);
+  system.SetRestitution(0.7);
+  EXPECT_EQ(system.GetRestitution(), 0.7);
+  EXPECT_THROW(system.SetRestitution(1.5), itk::ExceptionObject);
+}
+
 // Linear analysis of x'' = -w^2 x: symplectic Euler is stable for w h < 2.
 TEST(MassSpringSystem, SymplecticEulerStableBelowItsBoundDivergesAbove)
 {

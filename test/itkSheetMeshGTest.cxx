@@ -127,3 +127,41 @@ TEST(SheetMesh, VertexNormalOfUnusedPointIsZero)
   EXPECT_EQ(normals[14], 0.0);
   EXPECT_NEAR(normals[2], 1.0, 1e-12);
 }
+
+// A quarter cylinder of radius 10 on a 5 x 9 grid laid out on its grid: rows keep their arc
+// length, rows stay the row spacing apart, the triangles and the grid are kept.
+TEST(SheetMesh, GridLayoutOfACylinderIsIsometric)
+{
+  itk::SheetMesh mesh;
+  mesh.GridRows = 5;
+  mesh.GridColumns = 9;
+  const double pi = std::acos(-1.0);
+  for (int r = 0; r < mesh.GridRows; ++r)
+  {
+    for (int c = 0; c < mesh.GridColumns; ++c)
+    {
+      const double t = 0.5 * pi * c / (mesh.GridColumns - 1);
+      mesh.Points.insert(mesh.Points.end(), { 10.0 * std::cos(t), 10.0 * std::sin(t), 1.5 * r });
+      mesh.GridIndex.insert(mesh.GridIndex.end(), { r, c });
+      if (r > 0 && c > 0)
+      {
+        const uint32_t a = (r - 1) * mesh.GridColumns + c - 1, b = a + 1, d = r * mesh.GridColumns + c - 1, e = d + 1;
+        mesh.Triangles.insert(mesh.Triangles.end(), { a, b, e, a, e, d });
+      }
+    }
+  }
+  const itk::SheetMesh layout = mesh.ComputeGridLayout();
+  ASSERT_TRUE(itk::HaveSameTopology(mesh, layout));
+  EXPECT_EQ(layout.GridIndex, mesh.GridIndex);
+  const double chord = 2.0 * 10.0 * std::sin(0.25 * pi / (mesh.GridColumns - 1));
+  for (int r = 0; r < mesh.GridRows; ++r)
+  {
+    const size_t last = r * mesh.GridColumns + mesh.GridColumns - 1;
+    EXPECT_NEAR(layout.Points[3 * last], chord * (mesh.GridColumns - 1), 1e-9);
+    EXPECT_NEAR(layout.Points[3 * last + 1], 1.5 * r, 1e-9);
+    EXPECT_EQ(layout.Points[3 * last + 2], 0.0);
+  }
+  itk::SheetMesh noGrid = mesh;
+  noGrid.GridIndex.clear();
+  EXPECT_THROW(noGrid.ComputeGridLayout(), itk::ExceptionObject);
+}
