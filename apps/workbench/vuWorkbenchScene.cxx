@@ -80,6 +80,12 @@ ReadVolume(const std::string & path, Job & job, double from, double to, std::vec
 }
 } // namespace
 
+WorkbenchVolume::Pointer
+ReadScanVolume(const std::string & path, Job & job, std::vector<std::string> & warnings)
+{
+  return ReadVolume(path, job, 0.0, 1.0, warnings);
+}
+
 Scene
 OpenScan(const std::string & path, Job & job)
 {

@@ -80,6 +80,10 @@ OpenUnwrapOutput(const std::string & folder, Job & job);
 Scene
 OpenMeshAndVolume(const std::string & mesh, const std::string & volume, Job & job);
 
+/** Reads a scan as the command-line tool does (the reader's defaults). */
+WorkbenchVolume::Pointer
+ReadScanVolume(const std::string & path, Job & job, std::vector<std::string> & warnings);
+
 /** The focal plane of the layered texture: layers about the sheet, offset along its normal. */
 struct FocalPlane
 {

@@ -211,7 +211,8 @@ WorkbenchWindow::BuildWidgets()
   views->addWidget(top);
   views->addWidget(bottom);
   views->setStretchFactor(0, 3);
-  views->setStretchFactor(1, 2);
+  views->setStretchFactor(1, 1);
+  views->setSizes({ 600, 250 });
   auto * central = new QWidget;
   auto * centralLayout = new QVBoxLayout(central);
   centralLayout->setContentsMargins(0, 0, 0, 0);
@@ -409,7 +410,10 @@ WorkbenchWindow::BuildWidgets()
   }
   auto * reset = new QPushButton("Reset camera");
   connect(reset, &QPushButton::clicked, this, [this] { ResetCamera(); });
-  displayLayout->addWidget(reset, 3, 0, 1, 3);
+  displayLayout->addWidget(reset, 3, 0, 1, 2);
+  m_Parallel = new QCheckBox("parallel");
+  connect(m_Parallel, &QCheckBox::toggled, this, [this](bool on) { SetParallelProjection(on); });
+  displayLayout->addWidget(m_Parallel, 3, 2);
   layout->addWidget(display);
 
   auto * object = new QGroupBox("Object (translate mm, rotate degrees, scale)");
@@ -862,6 +866,19 @@ WorkbenchWindow::ResetCamera()
 {
   m_SheetRenderer->ResetCamera();
   m_FlatRenderer->ResetCamera();
+  RenderAll();
+}
+
+void
+WorkbenchWindow::SetParallelProjection(bool parallel)
+{
+  if (m_Parallel->isChecked() != parallel)
+  {
+    m_Parallel->setChecked(parallel); // comes back here through the signal
+    return;
+  }
+  m_SheetRenderer->GetActiveCamera()->SetParallelProjection(parallel);
+  m_SheetRenderer->ResetCamera();
   RenderAll();
 }
 
@@ -1574,7 +1591,10 @@ WorkbenchWindow::OpenSession(const QString & path)
     const std::string scan = scene.ScanPath;
     RunInBackground(
       "reading " + QString::fromStdString(scan),
-      [volume, scan](Job & job) { *volume = vu::OpenMeshAndVolume("", scan, job).Volume; },
+      [volume, scan](Job & job) {
+        std::vector<std::string> warnings;
+        *volume = ReadScanVolume(scan, job, warnings);
+      },
       [this, volume] {
         m_Scene.Volume = *volume;
         ShowScene();

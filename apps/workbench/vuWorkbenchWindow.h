@@ -187,6 +187,9 @@ public:
   SetStandardView(int axis, bool positive);
   void
   ResetCamera();
+  /** Orthographic (parallel) or perspective projection in the 3D view. */
+  void
+  SetParallelProjection(bool parallel);
   void
   SetShown(bool texture, bool mesh, bool particles);
   void
@@ -314,6 +317,7 @@ private:
   QCheckBox *              m_ShowTexture{ nullptr };
   QCheckBox *              m_ShowMesh{ nullptr };
   QCheckBox *              m_ShowParticles{ nullptr };
+  QCheckBox *              m_Parallel{ nullptr };
   QDoubleSpinBox *         m_Transform[7]{};
   QSlider *                m_FocusOffset{ nullptr };
   QSlider *                m_FocusLayers{ nullptr };
