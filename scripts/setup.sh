@@ -13,6 +13,7 @@ VU_PACKAGES=(
   libvtk9-dev libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libfreetype-dev fonts-dejavu-core
   libsuitesparse-dev libopenblas0-pthread
+  qtbase5-dev libvtk9-qt-dev xvfb xauth
   tesseract-ocr tesseract-ocr-eng time
   python3 python3-numpy python3-matplotlib python3-pydicom python3-tifffile python3-scipy
 )

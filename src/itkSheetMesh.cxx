@@ -232,6 +232,24 @@ SheetMesh::ComputeGridLayout() const
       previous = i;
     }
   }
+  // As the flattener lays a sheet: triangles counter-clockwise seen from +z (the side the
+  // 3D triangles' normals face), so a texture over the layout reads as over the flat mesh.
+  double signedArea = 0.0;
+  for (size_t t = 0; t < layout.GetNumberOfTriangles(); ++t)
+  {
+    const double * a = &layout.Points[3 * layout.Triangles[3 * t]];
+    const double * b = &layout.Points[3 * layout.Triangles[3 * t + 1]];
+    const double * c = &layout.Points[3 * layout.Triangles[3 * t + 2]];
+    signedArea += (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+  }
+  if (signedArea < 0.0)
+  {
+    const double top = static_cast<double>(rows - 1) * rowStep;
+    for (size_t i = 0; i < layout.GetNumberOfPoints(); ++i)
+    {
+      layout.Points[3 * i + 1] = top - layout.Points[3 * i + 1];
+    }
+  }
   return layout;
 }
 

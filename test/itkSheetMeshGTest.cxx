@@ -158,9 +158,30 @@ TEST(SheetMesh, GridLayoutOfACylinderIsIsometric)
   {
     const size_t last = r * mesh.GridColumns + mesh.GridColumns - 1;
     EXPECT_NEAR(layout.Points[3 * last], chord * (mesh.GridColumns - 1), 1e-9);
-    EXPECT_NEAR(layout.Points[3 * last + 1], 1.5 * r, 1e-9);
     EXPECT_EQ(layout.Points[3 * last + 2], 0.0);
   }
+  // Rows 1.5 apart, and every triangle counter-clockwise seen from +z; the same grid with
+  // its triangles turned the other way is laid out with its rows numbered downwards.
+  for (int r = 0; r + 1 < mesh.GridRows; ++r)
+  {
+    EXPECT_NEAR(std::abs(layout.Points[3 * (r * mesh.GridColumns) + 1] - layout.Points[3 * ((r + 1) * mesh.GridColumns) + 1]),
+                1.5, 1e-9);
+  }
+  for (size_t t = 0; t < layout.GetNumberOfTriangles(); ++t)
+  {
+    const double * a = &layout.Points[3 * layout.Triangles[3 * t]];
+    const double * b = &layout.Points[3 * layout.Triangles[3 * t + 1]];
+    const double * c = &layout.Points[3 * layout.Triangles[3 * t + 2]];
+    EXPECT_GT((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]), 0.0);
+  }
+  itk::SheetMesh turned = mesh;
+  for (size_t t = 0; t < turned.GetNumberOfTriangles(); ++t)
+  {
+    std::swap(turned.Triangles[3 * t + 1], turned.Triangles[3 * t + 2]);
+  }
+  const itk::SheetMesh turnedLayout = turned.ComputeGridLayout();
+  EXPECT_NEAR(turnedLayout.Points[1], 1.5 * (mesh.GridRows - 1), 1e-9);
+  EXPECT_NEAR(layout.Points[1], 0.0, 1e-9);
   itk::SheetMesh noGrid = mesh;
   noGrid.GridIndex.clear();
   EXPECT_THROW(noGrid.ComputeGridLayout(), itk::ExceptionObject);

@@ -46,6 +46,7 @@ struct Options
 {
   std::string Input, Mesh, Volume, Screenshot, Output, Integrator{ "symplectic-euler" };
   size_t      BenchmarkParticles{ 0 };
+  bool        RenderOnly{ false };
   double      Seconds{ 10.0 };
 };
 
@@ -65,8 +66,11 @@ RunFrameRateBenchmark(vu::WorkbenchWindow & window, const Options & options)
   controls.Integrator = itk::MassSpringIntegratorFromString(options.Integrator);
   controls.AutoAdvance = false;
   window.SetControls(controls);
-  window.SetShown(false, false, true);
-  window.StartSimulation();
+  window.SetShown(true, false, true);
+  if (!options.RenderOnly)
+  {
+    window.StartSimulation();
+  }
   auto *        timer = new QTimer(&window);
   auto *        clock = new QElapsedTimer;
   const auto    warmup = 1.0;
@@ -91,7 +95,7 @@ RunFrameRateBenchmark(vu::WorkbenchWindow & window, const Options & options)
       const nlohmann::json result = {
         { "particles", scene.Surface.GetNumberOfPoints() },
         { "triangles", scene.Surface.GetNumberOfTriangles() },
-        { "integrator", options.Integrator },
+        { "integrator", options.RenderOnly ? std::string("none (rendering only)") : options.Integrator },
         { "seconds", t },
         { "frames_per_second", static_cast<double>(window.GetFramesRendered() - firstFrame) / t },
         { "steps_per_second", static_cast<double>(window.GetSnapshot().Step - firstStep) / t },
@@ -130,6 +134,7 @@ main(int argc, char * argv[])
                  "measure the frame rate while a rolled sheet of about this many particles unrolls, print JSON, quit");
   app.add_option("--seconds", options.Seconds, "length of the frame-rate measurement")->check(CLI::PositiveNumber);
   app.add_option("--integrator", options.Integrator, "integrator of the frame-rate measurement");
+  app.add_flag("--render-only", options.RenderOnly, "frame-rate measurement without the simulation (the baseline)");
   app.add_option("--output", options.Output, "write the frame-rate measurement here");
   app.add_option("--screenshot", options.Screenshot, "after the measurement, save the 3D view here (PNG)");
   try
@@ -149,7 +154,9 @@ main(int argc, char * argv[])
     std::cerr << "virtual-unwrap-workbench: " << e.what() << std::endl;
     return 1;
   }
-  QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
+  QSurfaceFormat format = QVTKOpenGLNativeWidget::defaultFormat();
+  format.setSamples(0);
+  QSurfaceFormat::setDefaultFormat(format);
   QApplication        application(argc, argv);
   vu::WorkbenchWindow window;
   window.resize(1500, 950);

@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "vuSimulationRunner.h"
 
+#include <algorithm>
 #include <chrono>
 #include <climits>
 #include <cmath>
@@ -311,7 +312,7 @@ SimulationRunner::Publish(itk::MassSpringSystem & system, itk::SheetFlatteningPh
     m_RateClock = now;
     m_RateSteps = m_TotalSteps;
   }
-  if (!force && now - m_LastPublish < 1.0 / 60.0)
+  if (!force && now - m_LastPublish < 1.0 / 30.0)
   {
     return;
   }
@@ -496,6 +497,12 @@ SimulationRunner::Run(itk::SheetMesh surface, itk::MassSpringFlatteningParameter
   parameters.LockedEdge = ids.empty() ? itk::SheetLockedEdgeEnum::None : itk::SheetLockedEdgeEnum::Custom;
   parameters.LockedParticles = ids;
   parameters.CoarseningFactor = 1; // the viewer shows and locks every particle of the mesh
+  // One thread for the simulation, the other cores for drawing it (software OpenGL draws
+  // on the CPU): an interactive program must stay fluid while it simulates.
+  if (parameters.NumberOfWorkUnits == 0)
+  {
+    parameters.NumberOfWorkUnits = std::max(1u, std::thread::hardware_concurrency() / 2);
+  }
   parameters.MaximumStepsPerPhase = UINT_MAX;
   parameters.Integrator = controls.Integrator;
   parameters.TimeStep = controls.TimeStep;

@@ -33,7 +33,9 @@
 #include <QVTKOpenGLNativeWidget.h>
 #include <QtTest>
 
+#include <vtkCamera.h>
 #include <vtkRenderWindowInteractor.h>
+#include <vtkRenderer.h>
 
 #include <fstream>
 #include <set>
@@ -254,6 +256,14 @@ private slots:
     QTRY_COMPARE_WITH_TIMEOUT(m_Window->GetSnapshot().Integrator, itk::MassSpringIntegratorEnum::ImplicitEuler, 10000);
     const uint64_t switched = m_Window->GetSnapshot().Step;
     QTRY_VERIFY_WITH_TIMEOUT(m_Window->GetSnapshot().Step > switched + 100, 60000);
+    // The whole window mid-run, for the eye (README).
+    m_Window->SetShown(true, false, true);
+    m_Window->SetStandardView(1, false);
+    m_Window->GetSheetRenderer()->GetActiveCamera()->Azimuth(35.0);
+    m_Window->GetSheetRenderer()->GetActiveCamera()->Elevation(20.0);
+    m_Window->GetSheetRenderer()->ResetCameraClippingRange();
+    QTest::qWait(200);
+    m_Window->grab().save(m_Work + "/window.png");
     m_Window->FlattenNow();
     QTRY_COMPARE_WITH_TIMEOUT(m_Window->GetSnapshot().State, vu::SimulationSnapshot::Status::Finished, 120000);
     itk::SheetMesh flat;
@@ -412,7 +422,9 @@ private slots:
 int
 main(int argc, char * argv[])
 {
-  QSurfaceFormat::setDefaultFormat(QVTKOpenGLNativeWidget::defaultFormat());
+  QSurfaceFormat format = QVTKOpenGLNativeWidget::defaultFormat();
+  format.setSamples(0);
+  QSurfaceFormat::setDefaultFormat(format);
   QApplication     application(argc, argv);
   WorkbenchGuiTest test;
   return QTest::qExec(&test, argc, argv);

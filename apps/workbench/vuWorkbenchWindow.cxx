@@ -46,7 +46,6 @@
 #include <vtkCamera.h>
 #include <vtkCellArray.h>
 #include <vtkCutter.h>
-#include <vtkDoubleArray.h>
 #include <vtkFloatArray.h>
 #include <vtkGenericOpenGLRenderWindow.h>
 #include <vtkImageActor.h>
@@ -134,7 +133,8 @@ Triangles(const itk::SheetMesh & mesh)
 vtkSmartPointer<vtkPoints>
 Points(const std::vector<double> & xyz)
 {
-  auto array = vtkSmartPointer<vtkDoubleArray>::New();
+  // Single precision: what the graphics card takes, no conversion at every frame.
+  auto array = vtkSmartPointer<vtkFloatArray>::New();
   array->SetNumberOfComponents(3);
   array->SetNumberOfTuples(static_cast<vtkIdType>(xyz.size() / 3));
   std::copy(xyz.begin(), xyz.end(), array->GetPointer(0));
@@ -188,6 +188,9 @@ WorkbenchWindow::BuildWidgets()
   auto makeView = [](vtkSmartPointer<vtkRenderer> & renderer, const double background[3]) {
     auto * view = new QVTKOpenGLNativeWidget;
     auto   window = vtkSmartPointer<vtkGenericOpenGLRenderWindow>::New();
+    // No multisampling: with software OpenGL (Mesa llvmpipe, the usual case on a
+    // workstation without a GPU and under Xvfb) 8 samples cost most of every frame.
+    window->SetMultiSamples(0);
     view->setRenderWindow(window);
     renderer = vtkSmartPointer<vtkRenderer>::New();
     renderer->SetBackground(background[0], background[1], background[2]);
@@ -387,7 +390,7 @@ WorkbenchWindow::BuildWidgets()
 
   auto * display = new QGroupBox("Display");
   auto * displayLayout = new QGridLayout(display);
-  m_ShowTexture = new QCheckBox("textured surface");
+  m_ShowTexture = new QCheckBox("surface (textured)");
   m_ShowMesh = new QCheckBox("mesh");
   m_ShowParticles = new QCheckBox("particles");
   m_ShowTexture->setChecked(true);
@@ -683,14 +686,69 @@ WorkbenchWindow::ShowScene()
   const size_t           n = surface.GetNumberOfPoints();
   auto                   points = Points(surface.Points);
   m_SheetData->SetPoints(points);
-  m_SheetData->SetPolys(Triangles(surface));
+  m_FullPolys = Triangles(surface);
+  m_SheetData->SetPolys(m_FullPolys);
   m_ParticleData->SetPoints(points);
   auto verts = vtkSmartPointer<vtkCellArray>::New();
   for (vtkIdType i = 0; i < static_cast<vtkIdType>(n); ++i)
   {
     verts->InsertNextCell(1, &i);
   }
+  m_FullVerts = verts;
   m_ParticleData->SetVerts(verts);
+  // Level of detail for a large grid in motion: every n-th row and column, at most about
+  // 50 000 triangles and 25 000 particles (VTK's LOD actors do the same while a view moves).
+  m_CoarsePolys = nullptr;
+  m_CoarseVerts = nullptr;
+  m_CoarseBase.clear();
+  m_Coarse = false;
+  if (surface.IsGridStructured() && surface.GetNumberOfTriangles() > 60000)
+  {
+    const int step = static_cast<int>(std::ceil(std::sqrt(surface.GetNumberOfTriangles() / 50000.0)));
+    std::vector<vtkIdType> at(static_cast<size_t>(surface.GridRows) * surface.GridColumns, -1);
+    for (size_t i = 0; i < n; ++i)
+    {
+      at[static_cast<size_t>(surface.GridIndex[2 * i]) * surface.GridColumns + surface.GridIndex[2 * i + 1]] =
+        static_cast<vtkIdType>(i);
+    }
+    auto lines = [&](int count) {
+      std::vector<int> kept;
+      for (int k = 0; k < count; k += step)
+      {
+        kept.push_back(k);
+      }
+      if (kept.back() != count - 1)
+      {
+        kept.push_back(count - 1);
+      }
+      return kept;
+    };
+    const std::vector<int> rows = lines(surface.GridRows), columns = lines(surface.GridColumns);
+    m_CoarsePolys = vtkSmartPointer<vtkCellArray>::New();
+    m_CoarseVerts = vtkSmartPointer<vtkCellArray>::New();
+    auto id = [&](int r, int c) { return at[static_cast<size_t>(r) * surface.GridColumns + c]; };
+    for (size_t a = 0; a < rows.size(); ++a)
+    {
+      for (size_t b = 0; b < columns.size(); ++b)
+      {
+        const vtkIdType p = id(rows[a], columns[b]);
+        if (p >= 0)
+        {
+          m_CoarseBase.push_back(p);
+        }
+        if (a + 1 < rows.size() && b + 1 < columns.size())
+        {
+          const vtkIdType q = id(rows[a], columns[b + 1]), r = id(rows[a + 1], columns[b]), t = id(rows[a + 1], columns[b + 1]);
+          if (p >= 0 && q >= 0 && r >= 0 && t >= 0)
+          {
+            const vtkIdType first[3] = { p, q, t }, second[3] = { p, t, r };
+            m_CoarsePolys->InsertNextCell(3, first);
+            m_CoarsePolys->InsertNextCell(3, second);
+          }
+        }
+      }
+    }
+  }
   auto colours = vtkSmartPointer<vtkUnsignedCharArray>::New();
   colours->SetNumberOfComponents(3);
   colours->SetNumberOfTuples(static_cast<vtkIdType>(n));
@@ -769,7 +827,7 @@ WorkbenchWindow::UpdateSheetGeometry(const std::vector<double> & positions)
   {
     return;
   }
-  auto * array = vtkDoubleArray::SafeDownCast(points->GetData());
+  auto * array = vtkFloatArray::SafeDownCast(points->GetData());
   std::copy(positions.begin(), positions.end(), array->GetPointer(0));
   points->Modified();
   m_SheetData->Modified();
@@ -794,6 +852,28 @@ WorkbenchWindow::UpdateLockColours(const std::vector<uint8_t> & locked)
   }
   colours->Modified();
   m_ParticleData->Modified();
+  if (!m_CoarseBase.empty())
+  {
+    // The coarse particles and every locked one.
+    std::vector<uint8_t> drawn(static_cast<size_t>(colours->GetNumberOfTuples()), 0);
+    m_CoarseVerts = vtkSmartPointer<vtkCellArray>::New();
+    for (vtkIdType id : m_CoarseBase)
+    {
+      drawn[id] = 1;
+      m_CoarseVerts->InsertNextCell(1, &id);
+    }
+    for (vtkIdType i = 0; i < static_cast<vtkIdType>(locked.size()) && i < colours->GetNumberOfTuples(); ++i)
+    {
+      if (locked[i] && !drawn[i])
+      {
+        m_CoarseVerts->InsertNextCell(1, &i);
+      }
+    }
+    if (m_Coarse)
+    {
+      m_ParticleData->SetVerts(m_CoarseVerts);
+    }
+  }
   m_LockCount->setText(QString("locked: %1 (red), free: %2 (blue)").arg(count).arg(locked.size() - count));
 }
 
@@ -848,10 +928,25 @@ WorkbenchWindow::SetShown(bool texture, bool mesh, bool particles)
                                           texture && haveTexture ? 1.0 : 0.62);
   m_FlatActor->SetTexture(haveTexture ? m_TextureObject.Get() : nullptr);
   m_FlatActor->GetProperty()->SetColor(haveTexture ? 1.0 : 0.85, haveTexture ? 1.0 : 0.78, haveTexture ? 1.0 : 0.62);
-  m_SurfaceActor->SetVisibility(true);
+  m_SurfaceActor->SetVisibility(texture);
   m_MeshActor->SetVisibility(mesh);
   m_ParticleActor->SetVisibility(particles);
   RenderAll();
+}
+
+void
+WorkbenchWindow::SetDetail(bool coarse)
+{
+  coarse = coarse && m_CoarsePolys != nullptr;
+  if (coarse == m_Coarse)
+  {
+    return;
+  }
+  m_Coarse = coarse;
+  m_SheetData->SetPolys(coarse ? m_CoarsePolys : m_FullPolys);
+  m_ParticleData->SetVerts(coarse ? m_CoarseVerts : m_FullVerts);
+  m_SheetData->Modified();
+  m_ParticleData->Modified();
 }
 
 void
@@ -1456,6 +1551,7 @@ WorkbenchWindow::Poll()
         m_FlatData->Modified();
         m_FlatNote->SetInput("flat result");
         m_FlatRenderer->ResetCamera();
+        m_FlatView->renderWindow()->Render();
         RequestTexture();
       }
     }
@@ -1478,7 +1574,10 @@ WorkbenchWindow::Poll()
                        .arg(m_Snapshot.TimeStep, 0, 'g', 3)
                        .arg(m_Snapshot.KineticEnergy, 0, 'g', 3)
                        .arg(m_Snapshot.SpringEnergy, 0, 'g', 3));
-    RenderAll();
+    // The moving sheet only (coarser while it moves, when it is large); the flat view
+    // changes when a flat result or a texture comes.
+    SetDetail(m_Snapshot.State == SimulationSnapshot::Status::Running);
+    m_SheetView->renderWindow()->Render();
   }
   const double now = Now();
   if (now - m_LastSecond >= 1.0)

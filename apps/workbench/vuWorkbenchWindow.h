@@ -28,6 +28,7 @@
 
 #include <vtkActor.h>
 #include <vtkCallbackCommand.h>
+#include <vtkCellArray.h>
 #include <vtkCutter.h>
 #include <vtkImageActor.h>
 #include <vtkImageData.h>
@@ -258,6 +259,10 @@ private:
   FocalPlaneChanged();
   void
   RenderAll();
+  /** Draws the sheet at full resolution, or (coarse) every n-th row and column of a large
+   * grid while it moves. */
+  void
+  SetDetail(bool coarse);
   Session
   CurrentSession() const;
   const std::vector<double> &
@@ -341,6 +346,9 @@ private:
   vtkSmartPointer<vtkInteractorStyle> m_CameraStyle, m_SelectStyle;
   vtkSmartPointer<vtkCallbackCommand> m_SelectionObserver;
   Interaction                         m_Interaction{ Interaction::Camera };
+  vtkSmartPointer<vtkCellArray>       m_FullPolys, m_CoarsePolys, m_FullVerts, m_CoarseVerts;
+  std::vector<vtkIdType>              m_CoarseBase; // the particles drawn when coarse (besides the locked)
+  bool                                m_Coarse{ false };
   uint64_t                            m_Frames{ 0 };
   uint64_t                            m_FramesAtLastSecond{ 0 };
   double                              m_LastSecond{ 0.0 };
