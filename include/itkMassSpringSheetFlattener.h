@@ -172,9 +172,9 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
   double              Gravity{ 0.0 };
   double              Damping{ 0.0 };
   /** Time for the sheet to fall its own length under the simulation's gravity (s). */
-  double              FallTime{ 0.0 };
-  uint64_t            SpringEvaluations{ 0 };
-  double              Seconds{ 0.0 };
+  double   FallTime{ 0.0 };
+  uint64_t SpringEvaluations{ 0 };
+  double   Seconds{ 0.0 };
 };
 
 /** \class MassSpringSheetFlattener

@@ -247,8 +247,8 @@ TEST(MassSpringSheetFlattener, CallerEndsThePhasesAndResumesASavedState)
 {
   using Phase = itk::SheetFlatteningPhaseEnum;
   const itk::SheetMesh surface = vu::SpiralRollMesh(10.0, 4.0, 2.0, 4.0, 20.0, nullptr);
-  const auto           outer = itk::MassSpringSheetFlattener::EdgeParticles(surface, itk::SheetLockedEdgeEnum::OuterEdge);
-  const auto           inner = itk::MassSpringSheetFlattener::EdgeParticles(surface, itk::SheetLockedEdgeEnum::InnerEdge);
+  const auto outer = itk::MassSpringSheetFlattener::EdgeParticles(surface, itk::SheetLockedEdgeEnum::OuterEdge);
+  const auto inner = itk::MassSpringSheetFlattener::EdgeParticles(surface, itk::SheetLockedEdgeEnum::InnerEdge);
   ASSERT_EQ(outer.size(), static_cast<size_t>(surface.GridRows));
   ASSERT_EQ(inner.size(), outer.size());
   EXPECT_NE(outer, inner);
@@ -322,7 +322,7 @@ TEST(MassSpringSheetFlattener, CallerEndsThePhasesAndResumesASavedState)
 
 TEST(MassSpringSheetFlattener, WaveMovesOnlyFreeParticlesAlongTheNormal)
 {
-  const itk::SheetMesh surface = vu::SquareGridMesh(6, [](int r, int c) {
+  const itk::SheetMesh                surface = vu::SquareGridMesh(6, [](int r, int c) {
     return std::array<double, 3>{ { 2.0 * c, 2.0 * r, 0.0 } };
   });
   itk::MassSpringSystem               system;

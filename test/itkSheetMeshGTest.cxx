@@ -164,8 +164,10 @@ TEST(SheetMesh, GridLayoutOfACylinderIsIsometric)
   // its triangles turned the other way is laid out with its rows numbered downwards.
   for (int r = 0; r + 1 < mesh.GridRows; ++r)
   {
-    EXPECT_NEAR(std::abs(layout.Points[3 * (r * mesh.GridColumns) + 1] - layout.Points[3 * ((r + 1) * mesh.GridColumns) + 1]),
-                1.5, 1e-9);
+    EXPECT_NEAR(
+      std::abs(layout.Points[3 * (r * mesh.GridColumns) + 1] - layout.Points[3 * ((r + 1) * mesh.GridColumns) + 1]),
+      1.5,
+      1e-9);
   }
   for (size_t t = 0; t < layout.GetNumberOfTriangles(); ++t)
   {

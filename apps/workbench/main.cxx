@@ -56,8 +56,8 @@ int
 RunFrameRateBenchmark(vu::WorkbenchWindow & window, const Options & options)
 {
   const itk::SheetPhantomGeometry geometry{ itk::SheetPhantomGeometry::Parameters() };
-  const double area = geometry.GetSheetLength() * geometry.GetSheetWidth();
-  vu::Scene    scene;
+  const double                    area = geometry.GetSheetLength() * geometry.GetSheetWidth();
+  vu::Scene                       scene;
   scene.Kind = "mesh+volume";
   scene.Surface = geometry.MakeMidSurfaceMesh(std::sqrt(area / static_cast<double>(options.BenchmarkParticles)));
   window.SetScene(scene);
@@ -71,11 +71,11 @@ RunFrameRateBenchmark(vu::WorkbenchWindow & window, const Options & options)
   {
     window.StartSimulation();
   }
-  auto *        timer = new QTimer(&window);
-  auto *        clock = new QElapsedTimer;
-  const auto    warmup = 1.0;
-  uint64_t      firstFrame = 0, firstStep = 0;
-  bool          measuring = false;
+  auto *     timer = new QTimer(&window);
+  auto *     clock = new QElapsedTimer;
+  const auto warmup = 1.0;
+  uint64_t   firstFrame = 0, firstStep = 0;
+  bool       measuring = false;
   clock->start();
   QObject::connect(timer, &QTimer::timeout, &window, [&, timer, clock] {
     window.GetSheetRenderer()->GetActiveCamera()->Azimuth(2.0);
@@ -130,7 +130,8 @@ main(int argc, char * argv[])
   app.add_option("INPUT", options.Input, "a CT scan, an output folder of virtual-unwrap unwrap, or a session (.json)");
   app.add_option("--mesh", options.Mesh, "a sheet mesh to open (with --volume: its scan)");
   app.add_option("--volume", options.Volume, "the scan the mesh lies in");
-  app.add_option("--benchmark-frames", options.BenchmarkParticles,
+  app.add_option("--benchmark-frames",
+                 options.BenchmarkParticles,
                  "measure the frame rate while a rolled sheet of about this many particles unrolls, print JSON, quit");
   app.add_option("--seconds", options.Seconds, "length of the frame-rate measurement")->check(CLI::PositiveNumber);
   app.add_option("--integrator", options.Integrator, "integrator of the frame-rate measurement");

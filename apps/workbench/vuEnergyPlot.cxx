@@ -102,7 +102,7 @@ EnergyPlot::paintEvent(QPaintEvent *)
     return QPointF(area.left() + area.width() * (step - first) / (last - first), area.bottom() - area.height() * y);
   };
   const std::pair<const std::vector<double> *, QColor> series[] = { { &m_Kinetic, QColor(200, 60, 40) },
-                                                                     { &m_Spring, QColor(40, 90, 200) } };
+                                                                    { &m_Spring, QColor(40, 90, 200) } };
   for (const auto & s : series)
   {
     QPainterPath path(point(m_Steps[0], (*s.first)[0]));

@@ -76,10 +76,7 @@ ToString(SimulationSnapshot::Status status)
   return "unknown";
 }
 
-SimulationRunner::~SimulationRunner()
-{
-  Stop();
-}
+SimulationRunner::~SimulationRunner() { Stop(); }
 
 void
 SimulationRunner::Start(const itk::SheetMesh &                      surface,
@@ -116,7 +113,7 @@ SimulationRunner::Start(const itk::SheetMesh &                      surface,
   if (resume != nullptr)
   {
     const auto phase = resume->Phase == itk::SheetFlatteningPhaseEnum::Unroll ? itk::SheetFlatteningPhaseEnum::Unroll
-                                                                               : itk::SheetFlatteningPhaseEnum::Flatten;
+                                                                              : itk::SheetFlatteningPhaseEnum::Flatten;
     m_Flattener.SetInitialState(phase, resume->Positions, resume->Velocities);
   }
   m_Done = false;
@@ -286,10 +283,9 @@ SimulationRunner::ApplyControls(itk::MassSpringSystem & system, const Simulation
   system.SetIntegrator(controls.Integrator);
   itk::MassSpringFlatteningParameters p = m_Parameters;
   p.Stiffness *= controls.StiffnessScale;
-  const double h =
-    controls.TimeStep > 0.0
-      ? controls.TimeStep
-      : itk::MassSpringSheetFlattener::AutomaticTimeStep(system, controls.Integrator, p, m_Flattener.GetReport().FallTime);
+  const double h = controls.TimeStep > 0.0 ? controls.TimeStep
+                                           : itk::MassSpringSheetFlattener::AutomaticTimeStep(
+                                               system, controls.Integrator, p, m_Flattener.GetReport().FallTime);
   system.SetTimeStep(h);
   system.SetDamping(controls.Damping >= 0.0 ? controls.Damping : m_Flattener.GetReport().Damping);
   if (system.HasCollisionPlane())
@@ -317,9 +313,9 @@ SimulationRunner::Publish(itk::MassSpringSystem & system, itk::SheetFlatteningPh
     return;
   }
   m_LastPublish = now;
-  const double         kinetic = system.ComputeKineticEnergy();
-  const double         spring = system.ComputeSpringEnergy();
-  std::vector<uint8_t> locks = LockFlags(system);
+  const double                kinetic = system.ComputeKineticEnergy();
+  const double                spring = system.ComputeSpringEnergy();
+  std::vector<uint8_t>        locks = LockFlags(system);
   std::lock_guard<std::mutex> lock(m_Mutex);
   m_Snapshot.Phase = phase;
   m_Snapshot.Step = m_TotalSteps;
@@ -331,8 +327,8 @@ SimulationRunner::Publish(itk::MassSpringSystem & system, itk::SheetFlatteningPh
   m_Snapshot.Integrator = system.GetIntegrator();
   m_Snapshot.Positions = system.GetPositions();
   m_Snapshot.Locked = locks;
-  m_Snapshot.State = m_Paused && m_StepsAllowed == 0 ? SimulationSnapshot::Status::Paused
-                                                     : SimulationSnapshot::Status::Running;
+  m_Snapshot.State =
+    m_Paused && m_StepsAllowed == 0 ? SimulationSnapshot::Status::Paused : SimulationSnapshot::Status::Running;
   ++m_Snapshot.Version;
   m_Current.Phase = phase;
   m_Current.Step = m_TotalSteps;
@@ -479,7 +475,9 @@ SimulationRunner::Callback(itk::MassSpringSystem & system, itk::SheetFlatteningP
 }
 
 void
-SimulationRunner::Run(itk::SheetMesh surface, itk::MassSpringFlatteningParameters parameters, std::vector<uint8_t> locked)
+SimulationRunner::Run(itk::SheetMesh                      surface,
+                      itk::MassSpringFlatteningParameters parameters,
+                      std::vector<uint8_t>                locked)
 {
   std::vector<uint32_t> ids;
   for (size_t i = 0; i < locked.size(); ++i)
@@ -528,9 +526,9 @@ SimulationRunner::Run(itk::SheetMesh surface, itk::MassSpringFlatteningParameter
     m_ControlsChanged = controls.StiffnessScale != 1.0 || controls.GravityScale != 1.0;
   }
   m_Flattener.SetParameters(parameters);
-  m_Flattener.SetStepCallback([this](itk::MassSpringSystem & system, itk::SheetFlatteningPhaseEnum phase, uint64_t step) {
-    return Callback(system, phase, step);
-  });
+  m_Flattener.SetStepCallback([this](itk::MassSpringSystem &       system,
+                                     itk::SheetFlatteningPhaseEnum phase,
+                                     uint64_t                      step) { return Callback(system, phase, step); });
   m_Flattener.SetPhaseEndCallback([this](itk::SheetFlatteningPhaseEnum phase, bool converged) {
     std::lock_guard<std::mutex> lock(m_Mutex);
     if (phase == itk::SheetFlatteningPhaseEnum::Unroll)

@@ -193,14 +193,14 @@ private:
   std::atomic<bool>       m_Done{ true };
 
   // Requests from the viewer (under m_Mutex).
-  bool                                          m_StopRequested{ false };
-  bool                                          m_Paused{ false };
-  unsigned int                                  m_StepsAllowed{ 0 };
-  bool                                          m_FlattenRequested{ false };
-  SimulationControls                            m_Controls;
-  bool                                          m_ControlsChanged{ false };
+  bool                                                m_StopRequested{ false };
+  bool                                                m_Paused{ false };
+  unsigned int                                        m_StepsAllowed{ 0 };
+  bool                                                m_FlattenRequested{ false };
+  SimulationControls                                  m_Controls;
+  bool                                                m_ControlsChanged{ false };
   std::vector<std::pair<std::vector<uint32_t>, bool>> m_LockRequests;
-  double                                        m_WaveSpeed{ 0.0 };
+  double                                              m_WaveSpeed{ 0.0 };
 
   // The run's own state (simulation thread; copied out under m_Mutex).
   SimulationControls                  m_Applied;

@@ -163,7 +163,8 @@ private slots:
     QVERIFY(m_Window->GetScene().Surface.IsGridStructured());
     // The texture on the sheet's grid layout follows the load.
     QTRY_VERIFY_WITH_TIMEOUT(m_Window->GetTextureVersion() > 0 && !m_Window->IsBusy(), 60000);
-    m_Outer = itk::MassSpringSheetFlattener::EdgeParticles(m_Window->GetScene().Surface, itk::SheetLockedEdgeEnum::OuterEdge);
+    m_Outer =
+      itk::MassSpringSheetFlattener::EdgeParticles(m_Window->GetScene().Surface, itk::SheetLockedEdgeEnum::OuterEdge);
     QVERIFY(!m_Outer.empty());
   }
 
@@ -193,7 +194,7 @@ private slots:
     interactor->InvokeEvent(vtkCommand::MouseMoveEvent);
     interactor->InvokeEvent(vtkCommand::LeftButtonReleaseEvent);
     m_Window->SetInteraction(vu::WorkbenchWindow::Interaction::Camera);
-    const auto locked = m_Window->GetLockedParticles();
+    const auto               locked = m_Window->GetLockedParticles();
     const std::set<uint32_t> lockedSet(locked.begin(), locked.end());
     for (uint32_t id : m_Outer)
     {
@@ -229,7 +230,7 @@ private slots:
   void
   unrollsWithRk4SwitchesToImplicitAndFlattens()
   {
-    const auto locks = m_Window->GetLockedParticles();
+    const auto             locks = m_Window->GetLockedParticles();
     vu::SimulationControls controls = m_Window->GetControls();
     controls.Integrator = itk::MassSpringIntegratorEnum::RungeKutta4;
     controls.TimeStep = 0.0;
@@ -272,8 +273,9 @@ private slots:
     const double gui = EdgeStrainP95(surface, flat);
     // The command-line tool with the same locks.
     vu::WriteSheetMeshVtp((m_Work + "/surface.vtp").toStdString(), surface);
-    QStringList arguments = { "flatten", m_Work + "/surface.vtp", "-o", m_Work + "/cli-flat.obj", "--report",
-                              m_Work + "/cli-report.json", "--coarsening", "1", "--lock" };
+    QStringList arguments = { "flatten",  m_Work + "/surface.vtp",     "-o",           m_Work + "/cli-flat.obj",
+                              "--report", m_Work + "/cli-report.json", "--coarsening", "1",
+                              "--lock" };
     for (uint32_t id : locks)
     {
       arguments << QString::number(id);
@@ -364,7 +366,7 @@ private slots:
   void
   sessionFileRoundTrips()
   {
-    const QString path = m_Work + "/session.json";
+    const QString  path = m_Work + "/session.json";
     vu::FocalPlane plane = m_Window->GetFocalPlane();
     plane.Layers = 7;
     plane.Filter = "mean";
@@ -409,7 +411,8 @@ private slots:
     }
     std::ifstream        report((folder + "/report.json").toStdString());
     const nlohmann::json json = nlohmann::json::parse(report);
-    QCOMPARE(json.at("parameters").at("simulation").at("locked_particles").get<size_t>(), m_Window->GetLockedParticles().size());
+    QCOMPARE(json.at("parameters").at("simulation").at("locked_particles").get<size_t>(),
+             m_Window->GetLockedParticles().size());
   }
 
   void

@@ -252,7 +252,7 @@ RenderTexture(const Scene & scene, const itk::SheetMesh & domain, const FocalPla
     throw std::runtime_error("the texture holds no pixel on the sheet");
   }
   // Display window: the 1st to 99th percentile of the sheet's pixels.
-  auto   low = onSheet.begin() + onSheet.size() / 100, high = onSheet.begin() + (99 * onSheet.size()) / 100;
+  auto low = onSheet.begin() + onSheet.size() / 100, high = onSheet.begin() + (99 * onSheet.size()) / 100;
   std::nth_element(onSheet.begin(), low, onSheet.end());
   const double lo = *low;
   std::nth_element(onSheet.begin(), high, onSheet.end());

@@ -61,11 +61,11 @@ struct Scene
   /** "scan", "unwrap-output" or "mesh+volume". */
   std::string Kind;
   /** The scan (a path the reader takes), the mesh file, the unwrap output folder. */
-  std::string                ScanPath, MeshPath, OutputFolder;
-  WorkbenchVolume::Pointer   Volume;
-  itk::SheetMesh             Surface;
-  itk::SheetMesh             Flat;
-  std::vector<std::string>   Warnings;
+  std::string              ScanPath, MeshPath, OutputFolder;
+  WorkbenchVolume::Pointer Volume;
+  itk::SheetMesh           Surface;
+  itk::SheetMesh           Flat;
+  std::vector<std::string> Warnings;
 };
 
 /** Reads a CT scan (anything the command-line tool reads) and traces its sheet with the
@@ -104,7 +104,7 @@ struct FocalPlane
 struct TextureImage
 {
   unsigned int               Width{ 0 }, Height{ 0 };
-  std::vector<unsigned char> Pixels; // row 0 at the bottom (y up), as VTK stores images
+  std::vector<unsigned char> Pixels;             // row 0 at the bottom (y up), as VTK stores images
   std::vector<float>         TextureCoordinates; // (u, v) per point of the domain
   double                     Contrast{ 0.0 };    // standard deviation of the sheet's pixels (0-255)
 };

@@ -99,9 +99,10 @@ WriteSession(const std::string & path, const Session & s)
     json["flat_points"] = s.Source.Flat.Points;
   }
   json["controls"] = ControlsJson(s.Controls);
-  json["focal_plane"] = {
-    { "offset", s.Plane.Offset }, { "layers", s.Plane.Layers }, { "spacing", s.Plane.Spacing }, { "filter", s.Plane.Filter }
-  };
+  json["focal_plane"] = { { "offset", s.Plane.Offset },
+                          { "layers", s.Plane.Layers },
+                          { "spacing", s.Plane.Spacing },
+                          { "filter", s.Plane.Filter } };
   json["locked"] = s.Locked;
   if (s.HasState)
   {
@@ -171,7 +172,8 @@ ReadSession(const std::string & path)
       const auto & state = json.at("state");
       s.HasState = true;
       const std::string phase = state.at("phase").get<std::string>();
-      s.State.Phase = phase == "unroll" ? itk::SheetFlatteningPhaseEnum::Unroll : itk::SheetFlatteningPhaseEnum::Flatten;
+      s.State.Phase =
+        phase == "unroll" ? itk::SheetFlatteningPhaseEnum::Unroll : itk::SheetFlatteningPhaseEnum::Flatten;
       state.at("step").get_to(s.State.Step);
       state.at("positions").get_to(s.State.Positions);
       state.at("velocities").get_to(s.State.Velocities);

@@ -308,9 +308,27 @@ WorkbenchWindow::BuildWidgets()
   });
   select->AddObserver(vtkCommand::SelectionChangedEvent, m_SelectionObserver);
   m_SheetView->interactor()->SetInteractorStyle(m_CameraStyle);
+  // A large sheet is drawn coarser while the camera moves, as while it simulates.
+  m_InteractionObserver = vtkSmartPointer<vtkCallbackCommand>::New();
+  m_InteractionObserver->SetClientData(this);
+  m_InteractionObserver->SetCallback([](vtkObject *, unsigned long event, void * data, void *) {
+    auto * self = static_cast<WorkbenchWindow *>(data);
+    self->m_Interacting = event == vtkCommand::StartInteractionEvent;
+    self->SetDetail(self->m_Interacting || self->m_Snapshot.State == SimulationSnapshot::Status::Running);
+    if (!self->m_Interacting)
+    {
+      self->m_SheetView->renderWindow()->Render();
+    }
+  });
+  for (vtkInteractorStyle * style : { m_CameraStyle.Get(), m_SelectStyle.Get() })
+  {
+    style->AddObserver(vtkCommand::StartInteractionEvent, m_InteractionObserver);
+    style->AddObserver(vtkCommand::EndInteractionEvent, m_InteractionObserver);
+  }
   auto frameCounter = vtkSmartPointer<vtkCallbackCommand>::New();
   frameCounter->SetClientData(&m_Frames);
-  frameCounter->SetCallback([](vtkObject *, unsigned long, void * frames, void *) { ++*static_cast<uint64_t *>(frames); });
+  frameCounter->SetCallback(
+    [](vtkObject *, unsigned long, void * frames, void *) { ++*static_cast<uint64_t *>(frames); });
   m_SheetView->renderWindow()->AddObserver(vtkCommand::EndEvent, frameCounter);
 
   // Control panel.
@@ -371,9 +389,11 @@ WorkbenchWindow::BuildWidgets()
   auto * particles = new QGroupBox("Particles");
   auto * particleLayout = new QGridLayout(particles);
   m_Mode = new QComboBox;
-  m_Mode->addItems({ "camera (left: rotate)", "lock (left: click or rectangle)", "release (left: click or rectangle)" });
-  connect(m_Mode, QOverload<int>::of(&QComboBox::currentIndexChanged), this,
-          [this](int index) { SetInteraction(static_cast<Interaction>(index)); });
+  m_Mode->addItems(
+    { "camera (left: rotate)", "lock (left: click or rectangle)", "release (left: click or rectangle)" });
+  connect(m_Mode, QOverload<int>::of(&QComboBox::currentIndexChanged), this, [this](int index) {
+    SetInteraction(static_cast<Interaction>(index));
+  });
   particleLayout->addWidget(m_Mode, 0, 0, 1, 3);
   auto * outer = new QPushButton("Lock outer edge");
   auto * inner = new QPushButton("Lock inner edge");
@@ -423,7 +443,9 @@ WorkbenchWindow::BuildWidgets()
   auto * objectLayout = new QGridLayout(object);
   for (int k = 0; k < 7; ++k)
   {
-    m_Transform[k] = k < 3 ? Spin(-1e4, 1e4, 0.0, 2, 1.0) : k < 6 ? Spin(-360, 360, 0.0, 1, 5.0) : Spin(0.01, 100, 1.0, 3, 0.1);
+    m_Transform[k] = k < 3   ? Spin(-1e4, 1e4, 0.0, 2, 1.0)
+                     : k < 6 ? Spin(-360, 360, 0.0, 1, 5.0)
+                             : Spin(0.01, 100, 1.0, 3, 0.1);
     connect(m_Transform[k], QOverload<double>::of(&QDoubleSpinBox::valueChanged), this, [this] {
       if (!m_UpdatingWidgets)
       {
@@ -436,9 +458,9 @@ WorkbenchWindow::BuildWidgets()
 
   auto * focus = new QGroupBox("Focal plane");
   auto * focusForm = new QFormLayout(focus);
-  m_FocusOffset = Slider(-100, 100, 0);     // x 0.01 mm
-  m_FocusLayers = Slider(1, 21, 5);         // layers
-  m_FocusSpacing = Slider(0, 50, 0);        // x 0.01 mm, 0: automatic
+  m_FocusOffset = Slider(-100, 100, 0); // x 0.01 mm
+  m_FocusLayers = Slider(1, 21, 5);     // layers
+  m_FocusSpacing = Slider(0, 50, 0);    // x 0.01 mm, 0: automatic
   m_FocusFilter = new QComboBox;
   m_FocusFilter->addItems({ "max", "mean", "median", "min" });
   m_FocusLabel = new QLabel;
@@ -487,8 +509,8 @@ WorkbenchWindow::BuildMenus()
 {
   QMenu * file = menuBar()->addMenu("&File");
   file->addAction("Open &scan...", this, [this] {
-    const QString path =
-      QFileDialog::getOpenFileName(this, "Open a CT scan", QString(), "Scans (*.mha *.mhd *.nrrd *.nii *.nii.gz *.dcm *.tif *.tiff);;All files (*)");
+    const QString path = QFileDialog::getOpenFileName(
+      this, "Open a CT scan", QString(), "Scans (*.mha *.mhd *.nrrd *.nii *.nii.gz *.dcm *.tif *.tiff);;All files (*)");
     if (!path.isEmpty())
     {
       OpenScan(path);
@@ -509,7 +531,8 @@ WorkbenchWindow::BuildMenus()
     }
   });
   file->addAction("Open &mesh and volume...", this, [this] {
-    const QString mesh = QFileDialog::getOpenFileName(this, "Sheet mesh", QString(), "Meshes (*.vtp *.obj *.vtk *.off *.stl)");
+    const QString mesh =
+      QFileDialog::getOpenFileName(this, "Sheet mesh", QString(), "Meshes (*.vtp *.obj *.vtk *.off *.stl)");
     if (mesh.isEmpty())
     {
       return;
@@ -625,10 +648,12 @@ WorkbenchWindow::GetStatusText() const
 void
 WorkbenchWindow::OpenScan(const QString & path)
 {
-  auto result = std::make_shared<Scene>();
+  auto              result = std::make_shared<Scene>();
   const std::string file = path.toStdString();
   RunInBackground(
-    "opening " + path, [result, file](Job & job) { *result = vu::OpenScan(file, job); }, [this, result] { SetScene(*result); });
+    "opening " + path,
+    [result, file](Job & job) { *result = vu::OpenScan(file, job); },
+    [this, result] { SetScene(*result); });
 }
 
 void
@@ -648,7 +673,9 @@ WorkbenchWindow::OpenMeshAndVolume(const QString & mesh, const QString & volume)
   auto              result = std::make_shared<Scene>();
   const std::string m = mesh.toStdString(), v = volume.toStdString();
   RunInBackground(
-    "opening " + mesh, [result, m, v](Job & job) { *result = vu::OpenMeshAndVolume(m, v, job); }, [this, result] { SetScene(*result); });
+    "opening " + mesh,
+    [result, m, v](Job & job) { *result = vu::OpenMeshAndVolume(m, v, job); },
+    [this, result] { SetScene(*result); });
 }
 
 // ---------------------------------------------------------------------------------------
@@ -704,7 +731,7 @@ WorkbenchWindow::ShowScene()
   m_Coarse = false;
   if (surface.IsGridStructured() && surface.GetNumberOfTriangles() > 60000)
   {
-    const int step = static_cast<int>(std::ceil(std::sqrt(surface.GetNumberOfTriangles() / 50000.0)));
+    const int              step = static_cast<int>(std::ceil(std::sqrt(surface.GetNumberOfTriangles() / 50000.0)));
     std::vector<vtkIdType> at(static_cast<size_t>(surface.GridRows) * surface.GridColumns, -1);
     for (size_t i = 0; i < n; ++i)
     {
@@ -738,7 +765,8 @@ WorkbenchWindow::ShowScene()
         }
         if (a + 1 < rows.size() && b + 1 < columns.size())
         {
-          const vtkIdType q = id(rows[a], columns[b + 1]), r = id(rows[a + 1], columns[b]), t = id(rows[a + 1], columns[b + 1]);
+          const vtkIdType q = id(rows[a], columns[b + 1]), r = id(rows[a + 1], columns[b]),
+                          t = id(rows[a + 1], columns[b + 1]);
           if (p >= 0 && q >= 0 && r >= 0 && t >= 0)
           {
             const vtkIdType first[3] = { p, q, t }, second[3] = { p, t, r };
@@ -816,7 +844,7 @@ const std::vector<double> &
 WorkbenchWindow::DisplayedPositions() const
 {
   return m_SimulationStarted && m_Snapshot.Positions.size() == m_Scene.Surface.Points.size() ? m_Snapshot.Positions
-                                                                                              : m_Scene.Surface.Points;
+                                                                                             : m_Scene.Surface.Points;
 }
 
 void
@@ -924,8 +952,8 @@ WorkbenchWindow::SetShown(bool texture, bool mesh, bool particles)
   m_UpdatingWidgets = false;
   const bool haveTexture = m_Texture.Width > 0;
   m_SurfaceActor->SetTexture(texture && haveTexture ? m_TextureObject.Get() : nullptr);
-  m_SurfaceActor->GetProperty()->SetColor(texture && haveTexture ? 1.0 : 0.85, texture && haveTexture ? 1.0 : 0.78,
-                                          texture && haveTexture ? 1.0 : 0.62);
+  m_SurfaceActor->GetProperty()->SetColor(
+    texture && haveTexture ? 1.0 : 0.85, texture && haveTexture ? 1.0 : 0.78, texture && haveTexture ? 1.0 : 0.62);
   m_FlatActor->SetTexture(haveTexture ? m_TextureObject.Get() : nullptr);
   m_FlatActor->GetProperty()->SetColor(haveTexture ? 1.0 : 0.85, haveTexture ? 1.0 : 0.78, haveTexture ? 1.0 : 0.62);
   m_SurfaceActor->SetVisibility(texture);
@@ -986,7 +1014,9 @@ WorkbenchWindow::SetStandardView(int axis, bool positive)
   {
     return;
   }
-  const double centre[3] = { 0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]), 0.5 * (bounds[4] + bounds[5]) };
+  const double centre[3] = { 0.5 * (bounds[0] + bounds[1]),
+                             0.5 * (bounds[2] + bounds[3]),
+                             0.5 * (bounds[4] + bounds[5]) };
   double       position[3] = { centre[0], centre[1], centre[2] };
   position[axis] += positive ? 1.0 : -1.0;
   vtkCamera * camera = m_SheetRenderer->GetActiveCamera();
@@ -1007,7 +1037,7 @@ WorkbenchWindow::SetObjectTransform(const std::array<double, 7> & t)
   }
   m_UpdatingWidgets = false;
   // About the sheet's centre: scale, rotate (x, then y, then z), translate.
-  double centre[3] = { 0, 0, 0 };
+  double       centre[3] = { 0, 0, 0 };
   const auto & rest = m_Scene.Surface.Points;
   for (size_t i = 0; i < rest.size(); ++i)
   {
@@ -1089,8 +1119,9 @@ WorkbenchWindow::ProjectParticle(uint32_t particle, double display[2]) const
   {
     return false;
   }
-  vtkCamera *  camera = m_SheetRenderer->GetActiveCamera();
-  vtkMatrix4x4 * projection = camera->GetCompositeProjectionTransformMatrix(m_SheetRenderer->GetTiledAspectRatio(), -1, 1);
+  vtkCamera *    camera = m_SheetRenderer->GetActiveCamera();
+  vtkMatrix4x4 * projection =
+    camera->GetCompositeProjectionTransformMatrix(m_SheetRenderer->GetTiledAspectRatio(), -1, 1);
   vtkNew<vtkMatrix4x4> full;
   vtkMatrix4x4::Multiply4x4(projection, m_ObjectTransform->GetMatrix(), full);
   const double p[4] = { positions[3 * particle], positions[3 * particle + 1], positions[3 * particle + 2], 1.0 };
@@ -1415,11 +1446,12 @@ void
 WorkbenchWindow::FocalPlaneChanged()
 {
   const FocalPlane plane = GetFocalPlane();
-  m_FocusLabel->setText(QString("offset %1 mm, %2 layers, spacing %3, %4")
-                          .arg(plane.Offset, 0, 'f', 2)
-                          .arg(plane.Layers)
-                          .arg(plane.Spacing > 0 ? QString("%1 mm").arg(plane.Spacing, 0, 'f', 2) : QString("automatic"))
-                          .arg(QString::fromStdString(plane.Filter)));
+  m_FocusLabel->setText(
+    QString("offset %1 mm, %2 layers, spacing %3, %4")
+      .arg(plane.Offset, 0, 'f', 2)
+      .arg(plane.Layers)
+      .arg(plane.Spacing > 0 ? QString("%1 mm").arg(plane.Spacing, 0, 'f', 2) : QString("automatic"))
+      .arg(QString::fromStdString(plane.Filter)));
   if (!m_UpdatingWidgets)
   {
     RequestTexture();
@@ -1473,7 +1505,8 @@ WorkbenchWindow::ApplyTexture()
   }
   m_TextureImage->SetDimensions(static_cast<int>(m_Texture.Width), static_cast<int>(m_Texture.Height), 1);
   m_TextureImage->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
-  std::copy(m_Texture.Pixels.begin(), m_Texture.Pixels.end(), static_cast<unsigned char *>(m_TextureImage->GetScalarPointer()));
+  std::copy(
+    m_Texture.Pixels.begin(), m_Texture.Pixels.end(), static_cast<unsigned char *>(m_TextureImage->GetScalarPointer()));
   m_TextureImage->Modified();
   m_TextureObject->SetInputData(m_TextureImage);
   auto tcoords = vtkSmartPointer<vtkFloatArray>::New();
@@ -1536,7 +1569,8 @@ WorkbenchWindow::Poll()
     {
       UpdateLockColours(m_Snapshot.Locked);
     }
-    if (m_Snapshot.State == SimulationSnapshot::Status::Running || m_Snapshot.State == SimulationSnapshot::Status::Paused)
+    if (m_Snapshot.State == SimulationSnapshot::Status::Running ||
+        m_Snapshot.State == SimulationSnapshot::Status::Paused)
     {
       m_Energy->Add(m_Snapshot.Step, m_Snapshot.KineticEnergy, m_Snapshot.SpringEnergy);
     }
@@ -1576,7 +1610,7 @@ WorkbenchWindow::Poll()
                        .arg(m_Snapshot.SpringEnergy, 0, 'g', 3));
     // The moving sheet only (coarser while it moves, when it is large); the flat view
     // changes when a flat result or a texture comes.
-    SetDetail(m_Snapshot.State == SimulationSnapshot::Status::Running);
+    SetDetail(m_Interacting || m_Snapshot.State == SimulationSnapshot::Status::Running);
     m_SheetView->renderWindow()->Render();
   }
   const double now = Now();
@@ -1723,9 +1757,10 @@ WorkbenchWindow::Export(const QString & folder)
   const QString tool = QProcessEnvironment::systemEnvironment().value(
     "VU_TOOL", QCoreApplication::applicationDirPath() + "/virtual-unwrap");
   const SimulationControls c = GetControls();
-  QStringList              simulation = { "--integrator", QString(itk::ToString(c.Integrator)), "--stiffness",
-                             QString::number(c.StiffnessScale, 'g', 17), "--restitution", QString::number(c.Restitution, 'g', 17),
-                             "--coarsening", "1" };
+  QStringList              simulation = { "--integrator",  QString(itk::ToString(c.Integrator)),
+                                          "--stiffness",   QString::number(c.StiffnessScale, 'g', 17),
+                                          "--restitution", QString::number(c.Restitution, 'g', 17),
+                                          "--coarsening",  "1" };
   if (c.TimeStep > 0.0)
   {
     simulation << "--time-step" << QString::number(c.TimeStep, 'g', 17);
@@ -1737,15 +1772,16 @@ WorkbenchWindow::Export(const QString & folder)
   const auto locked = GetLockedParticles();
   if (locked.empty())
   {
-    simulation << "--locked-edge" << "none";
+    simulation << "--locked-edge"
+               << "none";
   }
   QStringList arguments;
   if (!m_Scene.ScanPath.empty() && m_Scene.Kind != "mesh+volume")
   {
     const FocalPlane plane = GetFocalPlane();
-    arguments << "unwrap" << QString::fromStdString(m_Scene.ScanPath) << "-o" << folder << "--quiet" << "--focus"
-              << QString::number(plane.Offset, 'g', 17) << "--layers" << QString::number(plane.Layers) << "--filter"
-              << QString::fromStdString(plane.Filter);
+    arguments << "unwrap" << QString::fromStdString(m_Scene.ScanPath) << "-o" << folder << "--quiet"
+              << "--focus" << QString::number(plane.Offset, 'g', 17) << "--layers" << QString::number(plane.Layers)
+              << "--filter" << QString::fromStdString(plane.Filter);
     if (plane.Spacing > 0.0)
     {
       arguments << "--layer-spacing" << QString::number(plane.Spacing, 'g', 17);
@@ -1761,7 +1797,8 @@ WorkbenchWindow::Export(const QString & folder)
       return;
     }
     QDir().mkpath(folder);
-    arguments << "flatten" << mesh << "-o" << folder + "/flat.obj" << "--report" << folder + "/report.json";
+    arguments << "flatten" << mesh << "-o" << folder + "/flat.obj"
+              << "--report" << folder + "/report.json";
   }
   arguments << simulation;
   if (!locked.empty())
@@ -1775,7 +1812,9 @@ WorkbenchWindow::Export(const QString & folder)
   delete m_Export;
   m_Export = new QProcess(this);
   m_ExportFolder = folder;
-  connect(m_Export, QOverload<int, QProcess::ExitStatus>::of(&QProcess::finished), this,
+  connect(m_Export,
+          QOverload<int, QProcess::ExitStatus>::of(&QProcess::finished),
+          this,
           [this](int code, QProcess::ExitStatus status) {
             m_Progress->hide();
             m_Cancel->hide();
@@ -1787,7 +1826,8 @@ WorkbenchWindow::Export(const QString & folder)
             else
             {
               const QString errors = QString::fromLocal8Bit(m_Export->readAllStandardError()).trimmed();
-              ShowError("export failed: " + (errors.isEmpty() ? QString("the tool stopped") : errors.split('\n').last()));
+              ShowError("export failed: " +
+                        (errors.isEmpty() ? QString("the tool stopped") : errors.split('\n').last()));
             }
           });
   connect(m_Export, &QProcess::errorOccurred, this, [this, tool](QProcess::ProcessError error) {

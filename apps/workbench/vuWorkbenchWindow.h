@@ -349,6 +349,8 @@ private:
   vtkSmartPointer<vtkCellArray>       m_FullPolys, m_CoarsePolys, m_FullVerts, m_CoarseVerts;
   std::vector<vtkIdType>              m_CoarseBase; // the particles drawn when coarse (besides the locked)
   bool                                m_Coarse{ false };
+  bool                                m_Interacting{ false };
+  vtkSmartPointer<vtkCallbackCommand> m_InteractionObserver;
   uint64_t                            m_Frames{ 0 };
   uint64_t                            m_FramesAtLastSecond{ 0 };
   double                              m_LastSecond{ 0.0 };
