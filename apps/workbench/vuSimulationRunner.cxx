@@ -185,10 +185,10 @@ SimulationRunner::RequestFlatten()
 }
 
 void
-SimulationRunner::Wave(double speed)
+SimulationRunner::Wave(double strength)
 {
   std::lock_guard<std::mutex> lock(m_Mutex);
-  m_WaveSpeed += speed;
+  m_WaveSpeed += strength;
   m_Wake.notify_all();
 }
 
@@ -395,7 +395,8 @@ SimulationRunner::TakeRequests(itk::MassSpringSystem & system, itk::SheetFlatten
     }
     if (wave != 0.0)
     {
-      itk::MassSpringSheetFlattener::ApplyWave(system, wave);
+      const auto & report = m_Flattener.GetReport();
+      itk::MassSpringSheetFlattener::ApplyWave(system, wave * report.Gravity * report.FallTime);
     }
   }
   return true;

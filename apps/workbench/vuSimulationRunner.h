@@ -146,9 +146,11 @@ public:
   /** Ends the unroll phase now: the sheet is dropped onto the plane and flattened. */
   void
   RequestFlatten();
-  /** Makes the hanging sheet wave: a velocity of `speed` (mm/s) at its free end. */
+  /** Makes the hanging sheet wave: its free end gets `strength` times g t_fall, the speed
+   * of a body after the sheet's fall time under the simulation's gravity (0.3 gives a wave
+   * one sees, whatever the sheet's size and units). */
   void
-  Wave(double speed);
+  Wave(double strength);
 
   /** The latest snapshot when it is newer than `version` (returns false otherwise). */
   bool

@@ -349,8 +349,18 @@ private slots:
     m_Window->SetPaused(false);
     QTRY_VERIFY_WITH_TIMEOUT(m_Window->GetSnapshot().Step > resumed + 500, 60000);
     QCOMPARE(m_Window->GetSnapshot().State, vu::SimulationSnapshot::Status::Running);
-    // A wave while it hangs does not break it either.
+    // A wave, given while paused (applied at once, without a step): the kinetic energy
+    // changes by what the impulse adds; then it runs on without diverging.
+    m_Window->SetPaused(true);
+    QTRY_COMPARE_WITH_TIMEOUT(m_Window->GetSnapshot().State, vu::SimulationSnapshot::Status::Paused, 10000);
+    QTest::qWait(100);
+    const double   still = m_Window->GetSnapshot().KineticEnergy;
+    const uint64_t before = m_Window->GetSnapshot().Step;
     m_Window->Wave();
+    QTRY_VERIFY_WITH_TIMEOUT(std::abs(m_Window->GetSnapshot().KineticEnergy - still) > 0.1 * still, 10000);
+    QCOMPARE(m_Window->GetSnapshot().Step, before);
+    qInfo() << "kinetic energy before the wave" << still << "after" << m_Window->GetSnapshot().KineticEnergy;
+    m_Window->SetPaused(false);
     const uint64_t waved = m_Window->GetSnapshot().Step;
     QTRY_VERIFY_WITH_TIMEOUT(m_Window->GetSnapshot().Step > waved + 200, 60000);
     QVERIFY(m_Window->GetSnapshot().State != vu::SimulationSnapshot::Status::Diverged);

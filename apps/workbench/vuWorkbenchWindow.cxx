@@ -1382,11 +1382,7 @@ WorkbenchWindow::Wave()
   {
     return;
   }
-  // A tenth of the sheet's extent per second at its free end.
-  double bounds[6];
-  m_SheetData->GetBounds(bounds);
-  const double extent = std::max({ bounds[1] - bounds[0], bounds[3] - bounds[2], bounds[5] - bounds[4] });
-  m_Runner.Wave(0.1 * extent / std::max(1e-9, m_Snapshot.TimeStep * 100.0));
+  m_Runner.Wave(0.3);
 }
 
 bool
