@@ -23,6 +23,7 @@
 #include "vuReaderOptions.h"
 #include "vuSheetMeshIO.h"
 #include "vuSimulationOptions.h"
+#include "vuTextureOutput.h"
 
 #include "itkCTVolumeReader.h"
 #include "itkFlipImageFilter.h"
@@ -98,23 +99,6 @@ PeakMemoryMiB()
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   return usage.ru_maxrss / 1024.0;
-}
-
-itk::TextureLayersEnums::Filter
-FilterFromName(const std::string & name)
-{
-  using F = itk::TextureLayersEnums::Filter;
-  if (name == "mean")
-    return F::Mean;
-  if (name == "gaussian")
-    return F::GaussianMean;
-  if (name == "max")
-    return F::Max;
-  if (name == "min")
-    return F::Min;
-  if (name == "median")
-    return F::Median;
-  return F::SingleLayer;
 }
 
 itk::TextureLayersEnums::Side
@@ -268,44 +252,6 @@ WriteImageFile(const TImage * image, const fs::path & path)
   writer->SetInput(image);
   writer->SetFileName(path.string());
   writer->Update();
-}
-
-// 8-bit view of the texture: contrast stretched between the 0.5th and 99.5th percentiles of
-// the sheet's pixels; off the sheet black.
-itk::Image<unsigned char, 2>::Pointer
-EightBit(const TextureType * texture)
-{
-  std::vector<float> values;
-  for (itk::ImageRegionConstIterator<TextureType> it(texture, texture->GetBufferedRegion()); !it.IsAtEnd(); ++it)
-  {
-    if (std::isfinite(it.Get()))
-    {
-      values.push_back(it.Get());
-    }
-  }
-  if (values.empty())
-  {
-    throw UsageError("the texture has no pixel on the sheet");
-  }
-  auto percentile = [&values](double q) {
-    const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * values.size()));
-    std::nth_element(values.begin(), values.begin() + k, values.end());
-    return values[k];
-  };
-  const float lo = percentile(0.005), hi = std::max(percentile(0.995), lo + 1e-6f);
-  auto        out = itk::Image<unsigned char, 2>::New();
-  out->CopyInformation(texture);
-  out->SetRegions(texture->GetBufferedRegion());
-  out->Allocate();
-  itk::ImageRegionConstIterator<TextureType>             in(texture, texture->GetBufferedRegion());
-  itk::ImageRegionIterator<itk::Image<unsigned char, 2>> o(out, out->GetBufferedRegion());
-  for (; !in.IsAtEnd(); ++in, ++o)
-  {
-    const float v = in.Get();
-    o.Set(std::isfinite(v) ? static_cast<unsigned char>(std::clamp((v - lo) / (hi - lo), 0.0f, 1.0f) * 255.0f + 0.5f)
-                           : 0);
-  }
-  return out;
 }
 
 // Preview: a slice across the roll axis with the mesh's cross-section in red, beside the
@@ -669,17 +615,11 @@ WriteResults(const Results & results, const TexturerType & texturer, OutputStagi
   WriteSheetMeshObj((staging / "surface.obj").string(), results.Surface);
   WriteSheetMeshVtp((staging / "surface.vtp").string(), results.Surface, results.VertexTexture, "texture");
   // Texture coordinates: the flat point's position in texture.png, (0, 0) bottom left.
-  const double        pixelSize = texturer.GetAppliedPixelSize();
-  const auto          origin = texturer.GetOutput()->GetOrigin();
-  const double        width = textureSize[0] * pixelSize, height = textureSize[1] * pixelSize;
-  const auto &        flat = results.Flat;
-  std::vector<double> uv(2 * flat.GetNumberOfPoints());
-  for (size_t i = 0; i < flat.GetNumberOfPoints(); ++i)
-  {
-    uv[2 * i] = (flat.Points[3 * i] - (origin[0] - 0.5 * pixelSize)) / width;
-    uv[2 * i + 1] = (flat.Points[3 * i + 1] - (origin[1] - 0.5 * pixelSize)) / height;
-  }
-  WriteSheetMeshObj((staging / "flat.obj").string(), flat, uv, "texture.png");
+  const auto                origin = texturer.GetOutput()->GetOrigin();
+  const double              corner[2] = { origin[0], origin[1] };
+  const std::vector<double> uv =
+    FlatTextureCoordinates(results.Flat, corner, texturer.GetAppliedPixelSize(), textureSize[0], textureSize[1]);
+  WriteSheetMeshObj((staging / "flat.obj").string(), results.Flat, uv, "texture.png");
   WritePreview(results.Preview, results.Surface, results.Texture8, staging / "preview.png");
 }
 

@@ -45,28 +45,6 @@
 
 namespace vu {
 namespace {
-vtkNew<vtkPolyData>
-ToPolyData(const itk::SheetMesh & mesh)
-{
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(static_cast<vtkIdType>(mesh.GetNumberOfPoints()));
-  for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
-  {
-    points->SetPoint(static_cast<vtkIdType>(i), &mesh.Points[3 * i]);
-  }
-  vtkNew<vtkCellArray> triangles;
-  for (size_t t = 0; t < mesh.GetNumberOfTriangles(); ++t)
-  {
-    const vtkIdType ids[3] = { mesh.Triangles[3 * t], mesh.Triangles[3 * t + 1], mesh.Triangles[3 * t + 2] };
-    triangles->InsertNextCell(3, ids);
-  }
-  vtkNew<vtkPolyData> polyData;
-  polyData->SetPoints(points);
-  polyData->SetPolys(triangles);
-  return polyData;
-}
-
 // ITK's OBJ reader parses coordinates with an input stream, which neither accepts nor
 // reports "nan" or "inf"; it leaves whatever it had. Every vertex line is checked here so
 // that a non-finite or unreadable coordinate is named, with its line, as bad input.
@@ -363,6 +341,29 @@ VtkXmlCountProblem(const std::string & path)
 }
 } // namespace
 
+vtkSmartPointer<vtkPolyData>
+SheetMeshToPolyData(const itk::SheetMesh & mesh)
+{
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(static_cast<vtkIdType>(mesh.GetNumberOfPoints()));
+  for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    points->SetPoint(static_cast<vtkIdType>(i), &mesh.Points[3 * i]);
+  }
+  vtkNew<vtkCellArray> triangles;
+  for (size_t t = 0; t < mesh.GetNumberOfTriangles(); ++t)
+  {
+    const vtkIdType ids[3] = { mesh.Triangles[3 * t], mesh.Triangles[3 * t + 1], mesh.Triangles[3 * t + 2] };
+    triangles->InsertNextCell(3, ids);
+  }
+  auto polyData = vtkSmartPointer<vtkPolyData>::New();
+  polyData->SetPoints(points);
+  polyData->SetPolys(triangles);
+  return polyData;
+}
+
+
 itk::SheetMesh
 ReadSheetMesh(const std::string & path)
 {
@@ -460,7 +461,7 @@ WriteSheetMeshObj(const std::string &         path,
                   const std::vector<double> & textureCoordinates,
                   const std::string &         textureFileName)
 {
-  vtkNew<vtkPolyData> polyData = ToPolyData(mesh);
+  vtkSmartPointer<vtkPolyData> polyData = SheetMeshToPolyData(mesh);
   if (!textureCoordinates.empty())
   {
     vtkNew<vtkFloatArray> tcoords;
@@ -492,7 +493,7 @@ WriteSheetMeshVtp(const std::string &        path,
                   const std::vector<float> & pointScalars,
                   const std::string &        scalarName)
 {
-  vtkNew<vtkPolyData> polyData = ToPolyData(mesh);
+  vtkSmartPointer<vtkPolyData> polyData = SheetMeshToPolyData(mesh);
   if (mesh.IsGridStructured())
   {
     vtkNew<vtkIntArray> rows, columns;

@@ -20,6 +20,9 @@
 
 #include "itkSheetMesh.h"
 
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+
 #include <string>
 #include <vector>
 
@@ -30,6 +33,10 @@ namespace vu {
  * vu::UsageError naming the file. */
 itk::SheetMesh
 ReadSheetMesh(const std::string & path);
+
+/** The mesh as VTK PolyData: double-precision points and its triangles. */
+vtkSmartPointer<vtkPolyData>
+SheetMeshToPolyData(const itk::SheetMesh & mesh);
 
 /** Writes a Wavefront OBJ (through VTK's vtkOBJWriter). With texture coordinates (u, v per
  * point, in [0, 1]) and a texture file name, a material file of the same base name is

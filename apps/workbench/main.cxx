@@ -71,22 +71,22 @@ RunFrameRateBenchmark(vu::WorkbenchWindow & window, const Options & options)
   {
     window.StartSimulation();
   }
-  auto *     timer = new QTimer(&window);
-  auto *     clock = new QElapsedTimer;
-  const auto warmup = 1.0;
-  uint64_t   firstFrame = 0, firstStep = 0;
-  bool       measuring = false;
-  clock->start();
-  QObject::connect(timer, &QTimer::timeout, &window, [&, timer, clock] {
+  auto *        timer = new QTimer(&window);
+  QElapsedTimer clock; // lives until exec() returns, like the lambda that uses it
+  const auto    warmup = 1.0;
+  uint64_t      firstFrame = 0, firstStep = 0;
+  bool          measuring = false;
+  clock.start();
+  QObject::connect(timer, &QTimer::timeout, &window, [&, timer] {
     window.GetSheetRenderer()->GetActiveCamera()->Azimuth(2.0);
     window.GetSheetView()->renderWindow()->Render();
-    const double t = clock->elapsed() / 1000.0;
+    const double t = clock.elapsed() / 1000.0;
     if (!measuring && t >= warmup)
     {
       measuring = true;
       firstFrame = window.GetFramesRendered();
       firstStep = window.GetSnapshot().Step;
-      clock->restart();
+      clock.restart();
       return;
     }
     if (measuring && t >= options.Seconds)

@@ -299,7 +299,7 @@ SimulationRunner::ApplyControls(itk::MassSpringSystem & system, const Simulation
 }
 
 void
-SimulationRunner::Publish(itk::MassSpringSystem & system, itk::SheetFlatteningPhaseEnum phase, uint64_t, bool force)
+SimulationRunner::Publish(itk::MassSpringSystem & system, itk::SheetFlatteningPhaseEnum phase, bool force)
 {
   const double now = Now();
   if (now - m_RateClock >= 0.5)
@@ -319,7 +319,6 @@ SimulationRunner::Publish(itk::MassSpringSystem & system, itk::SheetFlatteningPh
   std::lock_guard<std::mutex> lock(m_Mutex);
   m_Snapshot.Phase = phase;
   m_Snapshot.Step = m_TotalSteps;
-  m_Snapshot.TotalSteps = m_TotalSteps;
   m_Snapshot.KineticEnergy = kinetic;
   m_Snapshot.SpringEnergy = spring;
   m_Snapshot.StepsPerSecond = m_Rate;
@@ -425,7 +424,7 @@ SimulationRunner::Callback(itk::MassSpringSystem & system, itk::SheetFlatteningP
   ++m_StepsSinceChange;
   const bool dynamic =
     phase == itk::SheetFlatteningPhaseEnum::Unroll || phase == itk::SheetFlatteningPhaseEnum::Flatten;
-  if (m_TotalSteps == 1 || phase != m_Current.Phase || !m_PhaseSeen)
+  if (!m_PhaseSeen || phase != m_Current.Phase)
   {
     m_PhaseSeen = true;
     m_Current.Phase = phase;
@@ -449,7 +448,7 @@ SimulationRunner::Callback(itk::MassSpringSystem & system, itk::SheetFlatteningP
     {
       return false;
     }
-    Publish(system, phase, m_TotalSteps, !first);
+    Publish(system, phase, !first);
     std::unique_lock<std::mutex> lock(m_Mutex);
     if (first && m_Paused && m_StepsAllowed > 0)
     {
@@ -466,7 +465,7 @@ SimulationRunner::Callback(itk::MassSpringSystem & system, itk::SheetFlatteningP
     }
     // Paused: shown as such; changes asked for meanwhile are applied without a step.
     lock.unlock();
-    Publish(system, phase, m_TotalSteps, true);
+    Publish(system, phase, true);
     lock.lock();
     m_Wake.wait(lock, [this] {
       return !m_Paused || m_StepsAllowed > 0 || m_StopRequested || m_ControlsChanged || !m_LockRequests.empty() ||
@@ -514,12 +513,7 @@ SimulationRunner::Run(itk::SheetMesh                      surface,
     m_InitialLocks = locked;
     m_Current = SimulationState();
     m_PhaseSeen = false;
-  }
-  m_Applied.StiffnessScale = 1.0;
-  m_Applied.GravityScale = 1.0;
-  {
-    // The scales apply from the first step (ApplyControls at the first callback).
-    std::lock_guard<std::mutex> lock(m_Mutex);
+    // The system starts unscaled; the scales are applied as a change at the first step.
     m_Applied = controls;
     m_Applied.StiffnessScale = 1.0;
     m_Applied.GravityScale = 1.0;

@@ -87,7 +87,7 @@ struct SimulationSnapshot
   uint64_t                      Version{ 0 };
   Status                        State{ Status::Idle };
   itk::SheetFlatteningPhaseEnum Phase{ itk::SheetFlatteningPhaseEnum::Unroll };
-  uint64_t                      Step{ 0 }, TotalSteps{ 0 };
+  uint64_t                      Step{ 0 };
   double                        KineticEnergy{ 0.0 }, SpringEnergy{ 0.0 }, StepsPerSecond{ 0.0 };
   double                        TimeStep{ 0.0 };
   itk::MassSpringIntegratorEnum Integrator{ itk::MassSpringIntegratorEnum::ImplicitEuler };
@@ -187,7 +187,7 @@ private:
   void
   ApplyControls(itk::MassSpringSystem & system, const SimulationControls & controls);
   void
-  Publish(itk::MassSpringSystem & system, itk::SheetFlatteningPhaseEnum phase, uint64_t step, bool force);
+  Publish(itk::MassSpringSystem & system, itk::SheetFlatteningPhaseEnum phase, bool force);
 
   mutable std::mutex      m_Mutex;
   std::condition_variable m_Wake;
@@ -206,7 +206,7 @@ private:
 
   // The run's own state (simulation thread; copied out under m_Mutex).
   SimulationControls                  m_Applied;
-  SimulationState                     m_Stable, m_Current, m_Candidate;
+  SimulationState                     m_Stable, m_Current;
   bool                                m_HasStable{ false };
   uint64_t                            m_StepsSinceChange{ 0 };
   itk::MassSpringSheetFlattener       m_Flattener;

@@ -300,12 +300,11 @@ private slots:
     const QImage flatShot = m_Window->GrabFlatView();
     qInfo() << "flat view grey deviation" << GreyDeviation(flatShot);
     QVERIFY(GreyDeviation(flatShot) > 12.0); // the text on the sheet is visible
-    // The offset slider itself, moved a few steps.
-    auto sliders = m_Window->findChildren<QSlider *>();
-    QVERIFY(!sliders.empty());
-    vu::FocalPlane plane = m_Window->GetFocalPlane();
-    plane.Offset = 0.3;
-    m_Window->SetFocalPlane(plane);
+    // The offset slider itself, moved to 0.3 mm off the sheet (30 steps of 0.01 mm).
+    auto * offset = m_Window->findChild<QSlider *>("focal-plane offset");
+    QVERIFY(offset != nullptr);
+    offset->setValue(30);
+    QCOMPARE(m_Window->GetFocalPlane().Offset, 0.3);
     QTRY_VERIFY_WITH_TIMEOUT(m_Window->GetTextureVersion() > version && !m_Window->IsBusy(), 60000);
     const std::vector<unsigned char> & after = m_Window->GetTexture().Pixels;
     QCOMPARE(after.size(), before.size());
@@ -317,6 +316,7 @@ private slots:
     difference /= static_cast<double>(after.size());
     qInfo() << "mean texture change with the focal plane 0.3 mm off the sheet:" << difference;
     QVERIFY(difference > 2.0);
+    vu::FocalPlane plane = m_Window->GetFocalPlane();
     plane.Offset = 0.0;
     m_Window->SetFocalPlane(plane);
     QTRY_VERIFY_WITH_TIMEOUT(!m_Window->IsBusy(), 60000);

@@ -25,6 +25,7 @@
 #include "itkSheetSegmentationImageFilter.h"
 #include "vuReaderOptions.h"
 #include "vuSheetMeshIO.h"
+#include "vuTextureOutput.h"
 
 #include <nlohmann/json.hpp>
 
@@ -206,14 +207,8 @@ RenderTexture(const Scene & scene, const itk::SheetMesh & domain, const FocalPla
   }
   using TextureType = itk::Image<float, 2>;
   using FilterType = itk::FlattenedTextureImageFilter<WorkbenchVolume, TextureType, MeshType>;
-  static const std::vector<std::pair<std::string, itk::TextureLayersEnums::Filter>> filters = {
-    { "mean", itk::TextureLayersEnums::Filter::Mean },
-    { "max", itk::TextureLayersEnums::Filter::Max },
-    { "min", itk::TextureLayersEnums::Filter::Min },
-    { "median", itk::TextureLayersEnums::Filter::Median }
-  };
-  auto found = std::find_if(filters.begin(), filters.end(), [&](const auto & f) { return f.first == plane.Filter; });
-  if (found == filters.end())
+  const auto layerFilter = FilterFromName(plane.Filter);
+  if (layerFilter == itk::TextureLayersEnums::Filter::SingleLayer && plane.Filter != "single")
   {
     throw std::runtime_error("unknown layer filter: " + plane.Filter);
   }
@@ -227,7 +222,7 @@ RenderTexture(const Scene & scene, const itk::SheetMesh & domain, const FocalPla
   filter->SetNumberOfLayers(std::max(1u, plane.Layers));
   filter->SetLayerSpacing(plane.Spacing > 0.0 ? plane.Spacing : 0.5 * voxel);
   filter->SetFocus(plane.Offset);
-  filter->SetLayerFilter(found->second);
+  filter->SetLayerFilter(layerFilter);
   Observe(filter, job, 0.0, 1.0);
   job.SetStage("sampling the texture");
   filter->Update();
@@ -236,52 +231,15 @@ RenderTexture(const Scene & scene, const itk::SheetMesh & domain, const FocalPla
   TextureImage        image;
   image.Width = static_cast<unsigned int>(size[0]);
   image.Height = static_cast<unsigned int>(size[1]);
-  const float *      values = texture->GetBufferPointer();
-  const size_t       count = image.Width * static_cast<size_t>(image.Height);
-  std::vector<float> onSheet;
-  onSheet.reserve(count);
-  for (size_t k = 0; k < count; ++k)
-  {
-    if (std::isfinite(values[k]))
-    {
-      onSheet.push_back(values[k]);
-    }
-  }
-  if (onSheet.empty())
-  {
-    throw std::runtime_error("the texture holds no pixel on the sheet");
-  }
-  // Display window: the 1st to 99th percentile of the sheet's pixels.
-  auto low = onSheet.begin() + onSheet.size() / 100, high = onSheet.begin() + (99 * onSheet.size()) / 100;
-  std::nth_element(onSheet.begin(), low, onSheet.end());
-  const double lo = *low;
-  std::nth_element(onSheet.begin(), high, onSheet.end());
-  const double hi = std::max(lo + 1e-12, double(*high));
-  image.Pixels.assign(count, 0);
-  double sum = 0.0, sum2 = 0.0;
-  for (size_t k = 0; k < count; ++k)
-  {
-    if (std::isfinite(values[k]))
-    {
-      const double v = std::clamp(255.0 * (values[k] - lo) / (hi - lo), 0.0, 255.0);
-      image.Pixels[k] = static_cast<unsigned char>(std::lround(v));
-      sum += v;
-      sum2 += v * v;
-    }
-  }
-  const double n = static_cast<double>(onSheet.size());
-  image.Contrast = std::sqrt(std::max(0.0, sum2 / n - (sum / n) * (sum / n)));
-  // ITK's index (0, 0) is the lowest x and y, the texture's bottom left in VTK's frame too.
-  const double pixel = filter->GetPixelSize();
+  // The contrast stretch of the tool's texture.png; ITK's index (0, 0) is the lowest x and
+  // y, the texture's bottom left in VTK's frame too.
+  const auto            eightBit = EightBit(texture);
+  const unsigned char * pixels = eightBit->GetBufferPointer();
+  image.Pixels.assign(pixels, pixels + static_cast<size_t>(image.Width) * image.Height);
   const auto   origin = texture->GetOrigin();
-  const double width = image.Width * pixel, height = image.Height * pixel;
-  image.TextureCoordinates.resize(2 * domain.GetNumberOfPoints());
-  for (size_t i = 0; i < domain.GetNumberOfPoints(); ++i)
-  {
-    image.TextureCoordinates[2 * i] = static_cast<float>((domain.Points[3 * i] - (origin[0] - 0.5 * pixel)) / width);
-    image.TextureCoordinates[2 * i + 1] =
-      static_cast<float>((domain.Points[3 * i + 1] - (origin[1] - 0.5 * pixel)) / height);
-  }
+  const double corner[2] = { origin[0], origin[1] };
+  const auto   uv = FlatTextureCoordinates(domain, corner, filter->GetPixelSize(), image.Width, image.Height);
+  image.TextureCoordinates.assign(uv.begin(), uv.end());
   job.Progress = 1.0;
   return image;
 }

@@ -106,7 +106,6 @@ struct TextureImage
   unsigned int               Width{ 0 }, Height{ 0 };
   std::vector<unsigned char> Pixels;             // row 0 at the bottom (y up), as VTK stores images
   std::vector<float>         TextureCoordinates; // (u, v) per point of the domain
-  double                     Contrast{ 0.0 };    // standard deviation of the sheet's pixels (0-255)
 };
 
 /** Samples the scan about `scene.Surface` into an image laid out like `domain` (same

@@ -18,6 +18,7 @@
 #include "vuWorkbenchWindow.h"
 
 #include "vuEnergyPlot.h"
+#include "vuSheetMeshIO.h"
 
 #include <QCheckBox>
 #include <QComboBox>
@@ -116,18 +117,6 @@ Slider(int lo, int hi, int value)
   slider->setRange(lo, hi);
   slider->setValue(value);
   return slider;
-}
-
-vtkSmartPointer<vtkCellArray>
-Triangles(const itk::SheetMesh & mesh)
-{
-  auto cells = vtkSmartPointer<vtkCellArray>::New();
-  for (size_t t = 0; t < mesh.GetNumberOfTriangles(); ++t)
-  {
-    const vtkIdType ids[3] = { mesh.Triangles[3 * t], mesh.Triangles[3 * t + 1], mesh.Triangles[3 * t + 2] };
-    cells->InsertNextCell(3, ids);
-  }
-  return cells;
 }
 
 vtkSmartPointer<vtkPoints>
@@ -459,8 +448,9 @@ WorkbenchWindow::BuildWidgets()
   auto * focus = new QGroupBox("Focal plane");
   auto * focusForm = new QFormLayout(focus);
   m_FocusOffset = Slider(-100, 100, 0); // x 0.01 mm
-  m_FocusLayers = Slider(1, 21, 5);     // layers
-  m_FocusSpacing = Slider(0, 50, 0);    // x 0.01 mm, 0: automatic
+  m_FocusOffset->setObjectName("focal-plane offset");
+  m_FocusLayers = Slider(1, 21, 5);  // layers
+  m_FocusSpacing = Slider(0, 50, 0); // x 0.01 mm, 0: automatic
   m_FocusFilter = new QComboBox;
   m_FocusFilter->addItems({ "max", "mean", "median", "min" });
   m_FocusLabel = new QLabel;
@@ -646,36 +636,32 @@ WorkbenchWindow::GetStatusText() const
 }
 
 void
+WorkbenchWindow::OpenInBackground(const QString & what, std::function<Scene(Job &)> open)
+{
+  auto result = std::make_shared<Scene>();
+  RunInBackground(
+    "opening " + what, [result, open](Job & job) { *result = open(job); }, [this, result] { SetScene(*result); });
+}
+
+void
 WorkbenchWindow::OpenScan(const QString & path)
 {
-  auto              result = std::make_shared<Scene>();
   const std::string file = path.toStdString();
-  RunInBackground(
-    "opening " + path,
-    [result, file](Job & job) { *result = vu::OpenScan(file, job); },
-    [this, result] { SetScene(*result); });
+  OpenInBackground(path, [file](Job & job) { return vu::OpenScan(file, job); });
 }
 
 void
 WorkbenchWindow::OpenUnwrapOutput(const QString & folder)
 {
-  auto              result = std::make_shared<Scene>();
   const std::string dir = folder.toStdString();
-  RunInBackground(
-    "opening " + folder,
-    [result, dir](Job & job) { *result = vu::OpenUnwrapOutput(dir, job); },
-    [this, result] { SetScene(*result); });
+  OpenInBackground(folder, [dir](Job & job) { return vu::OpenUnwrapOutput(dir, job); });
 }
 
 void
 WorkbenchWindow::OpenMeshAndVolume(const QString & mesh, const QString & volume)
 {
-  auto              result = std::make_shared<Scene>();
   const std::string m = mesh.toStdString(), v = volume.toStdString();
-  RunInBackground(
-    "opening " + mesh,
-    [result, m, v](Job & job) { *result = vu::OpenMeshAndVolume(m, v, job); },
-    [this, result] { SetScene(*result); });
+  OpenInBackground(mesh, [m, v](Job & job) { return vu::OpenMeshAndVolume(m, v, job); });
 }
 
 // ---------------------------------------------------------------------------------------
@@ -713,7 +699,9 @@ WorkbenchWindow::ShowScene()
   const size_t           n = surface.GetNumberOfPoints();
   auto                   points = Points(surface.Points);
   m_SheetData->SetPoints(points);
-  m_FullPolys = Triangles(surface);
+  // The rest shape (cut by the slice view) and the triangles of the moving sheet.
+  m_RestData->ShallowCopy(SheetMeshToPolyData(surface));
+  m_FullPolys = m_RestData->GetPolys();
   m_SheetData->SetPolys(m_FullPolys);
   m_ParticleData->SetPoints(points);
   auto verts = vtkSmartPointer<vtkCellArray>::New();
@@ -782,10 +770,8 @@ WorkbenchWindow::ShowScene()
   colours->SetNumberOfTuples(static_cast<vtkIdType>(n));
   colours->SetName("lock");
   m_ParticleData->GetPointData()->SetScalars(colours);
+  m_ColouredArray = nullptr; // a new array: coloured below whatever the locks
   UpdateLockColours(m_Locked);
-  m_RestData->SetPoints(Points(surface.Points));
-  m_RestData->SetPolys(Triangles(surface));
-  m_RestData->Modified();
   // Flat view: the flat mesh, or the grid's layout before flattening.
   itk::SheetMesh domain;
   if (m_Flat.GetNumberOfPoints() == n && n > 0)
@@ -805,8 +791,7 @@ WorkbenchWindow::ShowScene()
   m_FlatData->Initialize();
   if (domain.GetNumberOfPoints() > 0)
   {
-    m_FlatData->SetPoints(Points(domain.Points));
-    m_FlatData->SetPolys(Triangles(domain));
+    m_FlatData->ShallowCopy(SheetMeshToPolyData(domain));
   }
   m_FlatData->Modified();
   m_FlatRenderer->ResetCamera();
@@ -866,10 +851,12 @@ void
 WorkbenchWindow::UpdateLockColours(const std::vector<uint8_t> & locked)
 {
   auto * colours = vtkUnsignedCharArray::SafeDownCast(m_ParticleData->GetPointData()->GetScalars());
-  if (colours == nullptr)
+  if (colours == nullptr || (colours == m_ColouredArray && locked == m_ColouredLocks))
   {
-    return;
+    return; // every state of a run is shown with its locks; they seldom change
   }
+  m_ColouredArray = colours;
+  m_ColouredLocks = locked;
   size_t count = 0;
   for (vtkIdType i = 0; i < colours->GetNumberOfTuples(); ++i)
   {
@@ -1576,9 +1563,7 @@ WorkbenchWindow::Poll()
       if (m_Runner.GetResult(flat))
       {
         m_Flat = flat;
-        m_FlatData->SetPoints(Points(flat.Points));
-        m_FlatData->SetPolys(Triangles(flat));
-        m_FlatData->Modified();
+        m_FlatData->ShallowCopy(SheetMeshToPolyData(flat));
         m_FlatNote->SetInput("flat result");
         m_FlatRenderer->ResetCamera();
         m_FlatView->renderWindow()->Render();

@@ -40,6 +40,7 @@
 #include <vtkTextActor.h>
 #include <vtkTexture.h>
 #include <vtkTransform.h>
+#include <vtkUnsignedCharArray.h>
 
 #include <functional>
 #include <memory>
@@ -238,6 +239,8 @@ private:
   void
   BuildMenus();
   void
+  OpenInBackground(const QString & what, std::function<Scene(Job &)> open);
+  void
   RunInBackground(const QString & what, std::function<void(Job &)> work, std::function<void()> done);
   void
   ShowError(const QString & message);
@@ -350,6 +353,8 @@ private:
   std::vector<vtkIdType>              m_CoarseBase; // the particles drawn when coarse (besides the locked)
   bool                                m_Coarse{ false };
   bool                                m_Interacting{ false };
+  vtkUnsignedCharArray *              m_ColouredArray{ nullptr }; // the lock flags it shows
+  std::vector<uint8_t>                m_ColouredLocks;
   vtkSmartPointer<vtkCallbackCommand> m_InteractionObserver;
   uint64_t                            m_Frames{ 0 };
   uint64_t                            m_FramesAtLastSecond{ 0 };

@@ -1,0 +1,99 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "vuTextureOutput.h"
+
+#include "vuCommands.h"
+
+#include "itkImageRegionConstIterator.h"
+#include "itkImageRegionIterator.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace vu {
+itk::TextureLayersEnums::Filter
+FilterFromName(const std::string & name)
+{
+  using F = itk::TextureLayersEnums::Filter;
+  if (name == "mean")
+    return F::Mean;
+  if (name == "gaussian")
+    return F::GaussianMean;
+  if (name == "max")
+    return F::Max;
+  if (name == "min")
+    return F::Min;
+  if (name == "median")
+    return F::Median;
+  return F::SingleLayer;
+}
+
+itk::Image<unsigned char, 2>::Pointer
+EightBit(const itk::Image<float, 2> * texture)
+{
+  using TextureType = itk::Image<float, 2>;
+  std::vector<float> values;
+  for (itk::ImageRegionConstIterator<TextureType> it(texture, texture->GetBufferedRegion()); !it.IsAtEnd(); ++it)
+  {
+    if (std::isfinite(it.Get()))
+    {
+      values.push_back(it.Get());
+    }
+  }
+  if (values.empty())
+  {
+    throw UsageError("the texture has no pixel on the sheet");
+  }
+  auto percentile = [&values](double q) {
+    const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * values.size()));
+    std::nth_element(values.begin(), values.begin() + k, values.end());
+    return values[k];
+  };
+  const float lo = percentile(0.005), hi = std::max(percentile(0.995), lo + 1e-6f);
+  auto        out = itk::Image<unsigned char, 2>::New();
+  out->CopyInformation(texture);
+  out->SetRegions(texture->GetBufferedRegion());
+  out->Allocate();
+  itk::ImageRegionConstIterator<TextureType>             in(texture, texture->GetBufferedRegion());
+  itk::ImageRegionIterator<itk::Image<unsigned char, 2>> o(out, out->GetBufferedRegion());
+  for (; !in.IsAtEnd(); ++in, ++o)
+  {
+    const float v = in.Get();
+    o.Set(std::isfinite(v) ? static_cast<unsigned char>(std::clamp((v - lo) / (hi - lo), 0.0f, 1.0f) * 255.0f + 0.5f)
+                           : 0);
+  }
+  return out;
+}
+
+std::vector<double>
+FlatTextureCoordinates(const itk::SheetMesh & flat,
+                       const double           origin[2],
+                       double                 pixelSize,
+                       size_t                 width,
+                       size_t                 height)
+{
+  const double        w = static_cast<double>(width) * pixelSize, h = static_cast<double>(height) * pixelSize;
+  std::vector<double> uv(2 * flat.GetNumberOfPoints());
+  for (size_t i = 0; i < flat.GetNumberOfPoints(); ++i)
+  {
+    uv[2 * i] = (flat.Points[3 * i] - (origin[0] - 0.5 * pixelSize)) / w;
+    uv[2 * i + 1] = (flat.Points[3 * i + 1] - (origin[1] - 0.5 * pixelSize)) / h;
+  }
+  return uv;
+}
+} // namespace vu
