@@ -184,6 +184,12 @@ public:
   itkSetMacro(ResampleIrregularSeries, bool);
   itkGetConstMacro(ResampleIrregularSeries, bool);
   itkBooleanMacro(ResampleIrregularSeries);
+  /** Whether finding the volume's information (UpdateOutputInformation) also inflates the
+   * compressed data of a MetaImage file to find damage, as a file check does; off by default:
+   * reading the voxels inflates them once and stops on damage anyway. */
+  itkSetMacro(VerifyCompressedData, bool);
+  itkGetConstMacro(VerifyCompressedData, bool);
+  itkBooleanMacro(VerifyCompressedData);
   itkSetEnumMacro(SliceInterpolator, SliceInterpolatorEnum);
   itkGetEnumMacro(SliceInterpolator, SliceInterpolatorEnum);
   itkSetClampMacro(ResampledSliceSpacing, double, 0.0, NumericTraits<double>::max());
@@ -287,6 +293,7 @@ private:
   unsigned              m_ShrinkFactor{ 1 };
   double                m_SliceSpacingTolerance{ 0.05 };
   bool                  m_ResampleIrregularSeries{ true };
+  bool                  m_VerifyCompressedData{ false };
   SliceInterpolatorEnum m_SliceInterpolator{ SliceInterpolatorEnum::BSpline };
   double                m_ResampledSliceSpacing{ 0.0 };
 

@@ -19,7 +19,7 @@
 #define itkSheetMidSurfaceMeshFilter_hxx
 
 #include "itkConnectedComponentImageFilter.h"
-#include "itkImageRegionConstIteratorWithIndex.h"
+#include "itkImageBoundingRegion.h"
 #include "itkNearestNeighborInterpolateImageFunction.h"
 #include "itkRelabelComponentImageFilter.h"
 #include "itkResampleImageFilter.h"
@@ -27,6 +27,7 @@
 #include "itkSheetMidSurfaceMeshFilter.h"
 #include "itkSmoothingRecursiveGaussianImageFilter.h"
 
+#include <array>
 #include <numeric>
 #include <sstream>
 
@@ -54,39 +55,6 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GetIntensityImage() const ->
   return dynamic_cast<const IntensityImageType *>(this->ProcessObject::GetInput(1));
 }
 
-namespace SheetMidSurfaceDetail {
-/** The box of the voxels of `label` in `labels` within `region`, grown by `margin` voxels
- * and cropped to `region`. */
-template <typename TLabelImage>
-ImageRegion<3>
-LabelBox(const TLabelImage * labels, const ImageRegion<3> & region, typename TLabelImage::PixelType label, long margin)
-{
-  using IndexType = Index<3>;
-  IndexType lower = region.GetUpperIndex(), upper = region.GetIndex();
-  for (ImageRegionConstIteratorWithIndex<TLabelImage> it(labels, region); !it.IsAtEnd(); ++it)
-  {
-    if (it.Get() == label)
-    {
-      const IndexType index = it.GetIndex();
-      for (unsigned d = 0; d < 3; ++d)
-      {
-        lower[d] = std::min(lower[d], index[d]);
-        upper[d] = std::max(upper[d], index[d]);
-      }
-    }
-  }
-  for (unsigned d = 0; d < 3; ++d)
-  {
-    lower[d] -= margin;
-    upper[d] += margin;
-  }
-  ImageRegion<3> box;
-  box.SetIndex(lower);
-  box.SetUpperIndex(upper);
-  box.Crop(region);
-  return box;
-}
-} // namespace SheetMidSurfaceDetail
 
 template <typename TMaskImage, typename TOutputMesh>
 void
@@ -134,7 +102,8 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   }
 
   // Read only the bounding box of that sheet, plus two voxels.
-  const typename MaskImageType::RegionType box = SheetMidSurfaceDetail::LabelBox(labels, region, 1, 2);
+  const typename MaskImageType::RegionType box = BoundingRegionWhere(
+    labels, [](SizeValueType label) { return label == 1; }, 2);
 
   // The sheet's box as images of their own (index 0 at the box corner).
   using SheetImageType = Image<uint8_t, 3>;
@@ -157,15 +126,34 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     sheetIntensity->Allocate();
   }
   {
-    size_t offset = 0;
-    for (ImageRegionConstIteratorWithIndex<LabelImageType> it(labels, box); !it.IsAtEnd(); ++it, ++offset)
-    {
-      sheetMask->GetBufferPointer()[offset] = it.Get() == 1 ? 1 : 0;
-      if (intensity != nullptr)
-      {
-        sheetIntensity->GetBufferPointer()[offset] = intensity->GetPixel(it.GetIndex());
-      }
-    }
+    // Row by row, the slices in parallel.
+    const auto boxSize = box.GetSize();
+    MultiThreaderBase::New()->ParallelizeArray(
+      0,
+      boxSize[2],
+      [&](SizeValueType k) {
+        for (SizeValueType j = 0; j < boxSize[1]; ++j)
+        {
+          typename LabelImageType::IndexType first = box.GetIndex();
+          first[1] += static_cast<IndexValueType>(j);
+          first[2] += static_cast<IndexValueType>(k);
+          const SizeValueType   from = labels->ComputeOffset(first);
+          const SizeValueType   to = (k * boxSize[1] + j) * boxSize[0];
+          const SizeValueType * label = labels->GetBufferPointer() + from;
+          uint8_t *             out = sheetMask->GetBufferPointer() + to;
+          for (SizeValueType i = 0; i < boxSize[0]; ++i)
+          {
+            out[i] = label[i] == 1 ? 1 : 0;
+          }
+          if (intensity != nullptr)
+          {
+            std::copy_n(intensity->GetBufferPointer() + intensity->ComputeOffset(first),
+                        boxSize[0],
+                        sheetIntensity->GetBufferPointer() + to);
+          }
+        }
+      },
+      nullptr);
   }
   typename SheetImageType::Pointer sheetData;
   const bool                       axisKnown = this->AlignWithRollAxis(sheetMask, sheetIntensity, sheetData, warnings);
@@ -266,45 +254,63 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxis(const Sheet
   }
   smoothing->SetSigmaArray(sigmas);
   smoothing->Update();
-  const float *      smooth = smoothing->GetOutput()->GetBufferPointer();
-  const uint8_t *    mask = sheetMask->GetBufferPointer();
-  const auto         size = sheetMask->GetBufferedRegion().GetSize();
-  const auto &       spacing = sheetMask->GetSpacing();
-  const auto &       direction = sheetMask->GetDirection();
-  const size_t       strides[3] = { 1, size[0], size[0] * size[1] };
-  vnl_matrix<double> tensor(3, 3, 0.0);
-  size_t             offset = 0;
-  for (size_t k = 0; k < size[2]; ++k)
-  {
-    for (size_t j = 0; j < size[1]; ++j)
-    {
-      for (size_t i = 0; i < size[0]; ++i, ++offset)
+  const float *   smooth = smoothing->GetOutput()->GetBufferPointer();
+  const uint8_t * mask = sheetMask->GetBufferPointer();
+  const auto      size = sheetMask->GetBufferedRegion().GetSize();
+  const auto &    spacing = sheetMask->GetSpacing();
+  const auto &    direction = sheetMask->GetDirection();
+  const size_t    strides[3] = { 1, size[0], size[0] * size[1] };
+  // Slice by slice in parallel, then summed in slice order (the same sum on any number of
+  // threads).
+  std::vector<std::array<double, 9>> sliceTensors(size[2]);
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[2],
+    [&](SizeValueType k) {
+      std::array<double, 9> & sum = sliceTensors[k];
+      sum.fill(0.0);
+      size_t offset = k * strides[2];
+      for (size_t j = 0; j < size[1]; ++j)
       {
-        if (mask[offset] == 0)
+        for (size_t i = 0; i < size[0]; ++i, ++offset)
         {
-          continue;
-        }
-        const size_t index[3] = { i, j, k };
-        double       gradient[3];
-        for (unsigned d = 0; d < 3; ++d)
-        {
-          const size_t below = index[d] > 0 ? offset - strides[d] : offset;
-          const size_t above = index[d] + 1 < size[d] ? offset + strides[d] : offset;
-          const double steps = static_cast<double>(above - below) / static_cast<double>(strides[d]);
-          gradient[d] = steps > 0.0 ? (smooth[above] - smooth[below]) / (steps * spacing[d]) : 0.0;
-        }
-        double physical[3];
-        for (unsigned r = 0; r < 3; ++r)
-        {
-          physical[r] = direction[r][0] * gradient[0] + direction[r][1] * gradient[1] + direction[r][2] * gradient[2];
-        }
-        for (unsigned r = 0; r < 3; ++r)
-        {
-          for (unsigned c = 0; c < 3; ++c)
+          if (mask[offset] == 0)
           {
-            tensor(r, c) += physical[r] * physical[c];
+            continue;
+          }
+          const size_t index[3] = { i, j, k };
+          double       gradient[3];
+          for (unsigned d = 0; d < 3; ++d)
+          {
+            const size_t below = index[d] > 0 ? offset - strides[d] : offset;
+            const size_t above = index[d] + 1 < size[d] ? offset + strides[d] : offset;
+            const double steps = static_cast<double>(above - below) / static_cast<double>(strides[d]);
+            gradient[d] = steps > 0.0 ? (smooth[above] - smooth[below]) / (steps * spacing[d]) : 0.0;
+          }
+          double physical[3];
+          for (unsigned r = 0; r < 3; ++r)
+          {
+            physical[r] = direction[r][0] * gradient[0] + direction[r][1] * gradient[1] + direction[r][2] * gradient[2];
+          }
+          for (unsigned r = 0; r < 3; ++r)
+          {
+            for (unsigned c = 0; c < 3; ++c)
+            {
+              sum[3 * r + c] += physical[r] * physical[c];
+            }
           }
         }
+      }
+    },
+    nullptr);
+  vnl_matrix<double> tensor(3, 3, 0.0);
+  for (const auto & sum : sliceTensors)
+  {
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      for (unsigned c = 0; c < 3; ++c)
+      {
+        tensor(r, c) += sum[3 * r + c];
       }
     }
   }
@@ -341,22 +347,25 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxisFromCentroid
   // with material: slices near the ends of a tilted roll cut it partly, which biases them.
   const auto          size = sheetMask->GetBufferedRegion().GetSize();
   std::vector<double> count(size[2], 0.0), sumI(size[2], 0.0), sumJ(size[2], 0.0);
-  size_t              offset = 0;
-  for (size_t k = 0; k < size[2]; ++k)
-  {
-    for (size_t j = 0; j < size[1]; ++j)
-    {
-      for (size_t i = 0; i < size[0]; ++i, ++offset)
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[2],
+    [&](SizeValueType k) {
+      const uint8_t * mask = sheetMask->GetBufferPointer() + k * size[0] * size[1];
+      for (size_t j = 0; j < size[1]; ++j)
       {
-        if (sheetMask->GetBufferPointer()[offset] != 0)
+        for (size_t i = 0; i < size[0]; ++i)
         {
-          count[k] += 1.0;
-          sumI[k] += static_cast<double>(i);
-          sumJ[k] += static_cast<double>(j);
+          if (mask[j * size[0] + i] != 0)
+          {
+            count[k] += 1.0;
+            sumI[k] += static_cast<double>(i);
+            sumJ[k] += static_cast<double>(j);
+          }
         }
       }
-    }
-  }
+    },
+    nullptr);
   long first = -1, last = -1;
   for (size_t k = 0; k < size[2]; ++k)
   {

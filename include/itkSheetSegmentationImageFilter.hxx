@@ -22,7 +22,7 @@
 #include "itkBinaryMorphologicalClosingImageFilter.h"
 #include "itkBinaryThresholdImageFilter.h"
 #include "itkConnectedComponentImageFilter.h"
-#include "itkImageRegionConstIteratorWithIndex.h"
+#include "itkImageBoundingRegion.h"
 #include "itkMinimumMaximumImageCalculator.h"
 #include "itkOtsuThresholdImageFilter.h"
 #include "itkProgressAccumulator.h"
@@ -67,36 +67,12 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::ComputeAutomaticThreshold
   const double first = static_cast<double>(whole->GetThreshold());
 
   // Bounding box of what lies above the first threshold, padded by two voxels.
-  using IndexType = typename InputImageType::IndexType;
-  const auto region = input->GetLargestPossibleRegion();
-  IndexType  lower = region.GetUpperIndex(), upper = region.GetIndex();
-  bool       any = false;
-  for (ImageRegionConstIteratorWithIndex<InputImageType> it(input, region); !it.IsAtEnd(); ++it)
-  {
-    if (static_cast<double>(it.Get()) > first)
-    {
-      any = true;
-      const IndexType index = it.GetIndex();
-      for (unsigned d = 0; d < ImageDimension; ++d)
-      {
-        lower[d] = std::min(lower[d], index[d]);
-        upper[d] = std::max(upper[d], index[d]);
-      }
-    }
-  }
-  if (!any)
+  const typename InputImageType::RegionType box = BoundingRegionWhere(
+    input, [first](InputPixelType v) { return static_cast<double>(v) > first; }, 2);
+  if (box.GetNumberOfPixels() == 0)
   {
     return first;
   }
-  typename InputImageType::RegionType box;
-  for (unsigned d = 0; d < ImageDimension; ++d)
-  {
-    lower[d] -= 2;
-    upper[d] += 2;
-  }
-  box.SetIndex(lower);
-  box.SetUpperIndex(upper);
-  box.Crop(region);
   using RoiType = RegionOfInterestImageFilter<InputImageType, InputImageType>;
   auto roi = RoiType::New();
   roi->SetInput(input);

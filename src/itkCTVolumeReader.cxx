@@ -43,6 +43,24 @@ namespace itk {
 namespace {
 using namespace CTReading;
 
+// A reader of one file: GDCM for DICOM, the checked MetaIO for a MetaImage (MetaIO's own
+// inflation never ends on some damaged streams), otherwise the IO ITK's factories choose.
+ImageFileReader<OutputImageType>::Pointer
+NewFileReader(const std::string & file, bool dicom)
+{
+  auto reader = ImageFileReader<OutputImageType>::New();
+  reader->SetFileName(file);
+  if (dicom)
+  {
+    reader->SetImageIO(GDCMImageIO::New());
+  }
+  else if (auto io = detail::CheckedMetaImageIO::New(); io->CanReadFile(file.c_str()))
+  {
+    reader->SetImageIO(io);
+  }
+  return reader;
+}
+
 // The index box that encloses the physical box between two corners (mm): each of its eight
 // corners mapped to a continuous index, the box clipped to the image (`clipped` set then);
 // refused when it does not overlap the image.
@@ -251,6 +269,10 @@ CTVolumeReader::BuildPipeline()
       // The slice geometry was measured from the headers, against SliceSpacingTolerance.
       reader->SetSpacingWarningRelThreshold(NumericTraits<double>::max());
     }
+    else if (auto io = detail::CheckedMetaImageIO::New(); io->CanReadFile(m_SliceFileNames.front().c_str()))
+    {
+      reader->SetImageIO(io);
+    }
     // Reading every slice header on the first update would defeat a small region of
     // interest on a stack of thousands of slices.
     reader->MetaDataDictionaryArrayUpdateOff();
@@ -264,12 +286,7 @@ CTVolumeReader::BuildPipeline()
   }
   else
   {
-    auto reader = ImageFileReader<OutputImageType>::New();
-    reader->SetFileName(m_SliceFileNames.front());
-    if (m_IsDicom)
-    {
-      reader->SetImageIO(GDCMImageIO::New());
-    }
+    auto reader = NewFileReader(m_SliceFileNames.front(), m_IsDicom);
     tail = reader->GetOutput();
     m_Pipeline.push_back(reader.GetPointer());
   }
@@ -405,14 +422,9 @@ std::string
 CTVolumeReader::FindUnreadableFile() const
 {
   // The series reader does not say which slice failed: read them one by one to find it.
-  for (size_t i = m_FirstSliceToRead; i < m_EndSliceToRead; ++i)
+  for (size_t i = m_FirstSliceToRead; i < m_EndSliceToRead && m_SliceFileNames.size() > 1; ++i)
   {
-    auto reader = ImageFileReader<OutputImageType>::New();
-    reader->SetFileName(m_SliceFileNames[i]);
-    if (m_IsDicom)
-    {
-      reader->SetImageIO(GDCMImageIO::New());
-    }
+    auto reader = NewFileReader(m_SliceFileNames[i], m_IsDicom);
     try
     {
       reader->Update();
@@ -441,6 +453,7 @@ CTVolumeReader::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "ShrinkFactor: " << m_ShrinkFactor << std::endl;
   os << indent << "SliceSpacingTolerance: " << m_SliceSpacingTolerance << std::endl;
   os << indent << "ResampleIrregularSeries: " << m_ResampleIrregularSeries << std::endl;
+  os << indent << "VerifyCompressedData: " << m_VerifyCompressedData << std::endl;
   os << indent << "SliceInterpolator: " << ToString(m_SliceInterpolator) << std::endl;
   os << indent << "ResampledSliceSpacing: " << m_ResampledSliceSpacing << std::endl;
   os << indent << "InputKind: " << m_InputKind << std::endl;

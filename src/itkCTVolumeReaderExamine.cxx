@@ -416,6 +416,10 @@ CTVolumeReader::ExamineVolumeFile(const std::string & file)
     }
   }
   std::string truncation = MetaImageTruncation(file, io);
+  if (truncation.empty() && m_VerifyCompressedData)
+  {
+    truncation = MetaImageStreamProblem(file, io);
+  }
   if (truncation.empty())
   {
     truncation = NrrdTruncation(file, io);

@@ -24,6 +24,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <limits>
 #include <vector>
 
@@ -242,28 +243,35 @@ LayerStackTexture::Combine(const LayerStackType * stack,
   const float *       in = stack->GetBufferPointer();
   float *             out = texture->GetBufferPointer();
   const SizeValueType plane = size[0] * size[1];
-  std::vector<float>  samples(count);
-  for (SizeValueType p = 0; p < plane; ++p)
-  {
-    bool finite = true;
-    for (unsigned int k = 0; k < count; ++k)
-    {
-      samples[k] = in[index[k] * plane + p];
-      finite = finite && std::isfinite(samples[k]);
-    }
-    if (!finite)
-    {
-      out[p] = NaN;
-      continue;
-    }
-    double coreMean = 0.0;
-    for (SizeValueType k : core)
-    {
-      coreMean += samples[k];
-    }
-    coreMean = core.empty() ? 0.0 : coreMean / core.size();
-    out[p] = static_cast<float>(layers.Combine(samples.data()) - coreMean);
-  }
+  // Row by row in parallel.
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[1],
+    [&](SizeValueType row) {
+      std::vector<float> samples(count);
+      for (SizeValueType p = row * size[0]; p < (row + 1) * size[0]; ++p)
+      {
+        bool finite = true;
+        for (unsigned int k = 0; k < count; ++k)
+        {
+          samples[k] = in[index[k] * plane + p];
+          finite = finite && std::isfinite(samples[k]);
+        }
+        if (!finite)
+        {
+          out[p] = NaN;
+          continue;
+        }
+        double coreMean = 0.0;
+        for (SizeValueType k : core)
+        {
+          coreMean += samples[k];
+        }
+        coreMean = core.empty() ? 0.0 : coreMean / core.size();
+        out[p] = static_cast<float>(layers.Combine(samples.data()) - coreMean);
+      }
+    },
+    nullptr);
   return texture;
 }
 
@@ -276,10 +284,22 @@ LayerStackTexture::InkContrast(const TextureType * texture)
   {
     return 0.0;
   }
-  const double top = Rank(values, 0.99);
+  // The top rank from a copy on a second thread (given two), while the median and the
+  // spread are found.
+  std::future<double> top;
+  if (MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
+  {
+    top = std::async(std::launch::async, [copy = values]() mutable { return Rank(copy, 0.99); });
+  }
+  else
+  {
+    std::promise<double> now;
+    now.set_value(Rank(values, 0.99));
+    top = now.get_future();
+  }
   const double median = Rank(values, 0.5);
   const double spread = Spread(values, median);
-  return spread > 0.0 ? (top - median) / spread : 0.0;
+  return spread > 0.0 ? (top.get() - median) / spread : 0.0;
 }
 
 LayerStackTexture::TextureType::Pointer
@@ -301,21 +321,27 @@ LayerStackTexture::LayerWindow(const LayerStackType * stack, unsigned int first,
   const float *       in = stack->GetBufferPointer();
   float *             out = texture->GetBufferPointer();
   const SizeValueType plane = size[0] * size[1];
-  for (SizeValueType i = 0; i < plane; ++i)
-  {
-    double sum = 0.0;
-    int    finite = 0;
-    for (unsigned int k = first; k < first + count; ++k)
-    {
-      const float v = in[k * plane + i];
-      if (std::isfinite(v))
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[1],
+    [&](SizeValueType row) {
+      for (SizeValueType i = row * size[0]; i < (row + 1) * size[0]; ++i)
       {
-        sum += v;
-        ++finite;
+        double sum = 0.0;
+        int    finite = 0;
+        for (unsigned int k = first; k < first + count; ++k)
+        {
+          const float v = in[k * plane + i];
+          if (std::isfinite(v))
+          {
+            sum += v;
+            ++finite;
+          }
+        }
+        out[i] = finite > 0 ? static_cast<float>(sum / finite) : NaN;
       }
-    }
-    out[i] = finite > 0 ? static_cast<float>(sum / finite) : NaN;
-  }
+    },
+    nullptr);
   return texture;
 }
 

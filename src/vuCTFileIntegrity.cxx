@@ -20,6 +20,7 @@
 #include "vuCTInputFiles.h"
 #include "vuIsolatedParse.h"
 
+#include "itkByteSwapper.h"
 #include "itkImageIOFactory.h"
 #include "itkMetaImageIO.h"
 #include "itk_zlib.h"
@@ -58,20 +59,20 @@ LocalDataOffset(const std::string & file)
   return 0;
 }
 
-// Why a zlib or gzip stream from `offset` of `file` does not inflate to `bytes`, or "".
-// MetaIO's inflation loop never ends on some damaged streams, so the stream is inflated
-// once here first, into a small buffer that is thrown away.
+// Why a zlib or gzip stream from `offset` of `file` does not inflate to `bytes` ("its
+// compressed data ..."), or "": inflated into `output` (`bytes` long), or into a small
+// buffer thrown away when it is null.
 std::string
-CompressedStreamProblem(const std::string & file, uintmax_t offset, uintmax_t bytes)
+InflateStream(const std::string & file, uintmax_t offset, uintmax_t bytes, unsigned char * output)
 {
   std::ifstream in(file, std::ios::binary);
   in.seekg(static_cast<std::streamoff>(offset));
   z_stream stream{};
   if (!in || inflateInit2(&stream, 15 + 32) != Z_OK)
   {
-    return "cannot read " + file + ": its compressed data cannot be opened";
+    return "its compressed data cannot be opened";
   }
-  std::vector<unsigned char> input(1u << 16), output(1u << 16);
+  std::vector<unsigned char> input(1u << 20), scratch(output == nullptr ? 1u << 16 : 0);
   int                        status = Z_OK;
   while (stream.total_out < bytes && status == Z_OK)
   {
@@ -85,8 +86,10 @@ CompressedStreamProblem(const std::string & file, uintmax_t offset, uintmax_t by
         break;
       }
     }
-    stream.next_out = output.data();
-    stream.avail_out = static_cast<uInt>(output.size());
+    // Never beyond the image: a stream that holds more stops there.
+    const uintmax_t room = output == nullptr ? scratch.size() : bytes - stream.total_out;
+    stream.next_out = output == nullptr ? scratch.data() : output + stream.total_out;
+    stream.avail_out = static_cast<uInt>(std::min<uintmax_t>(room, uintmax_t{ 1 } << 30));
     status = inflate(&stream, Z_NO_FLUSH);
     if (status == Z_BUF_ERROR)
     {
@@ -97,10 +100,43 @@ CompressedStreamProblem(const std::string & file, uintmax_t offset, uintmax_t by
   inflateEnd(&stream);
   if (inflated < bytes)
   {
-    return "cannot read " + file + ": its compressed data is damaged (it inflates to " + std::to_string(inflated) +
-           " of the " + std::to_string(bytes) + " bytes of the image)";
+    return "its compressed data is damaged (it inflates to " + std::to_string(inflated) + " of the " +
+           std::to_string(bytes) + " bytes of the image)";
   }
   return {};
+}
+
+// Where the compressed voxels of a MetaImage lie: its data file and the offset in it; false
+// when MetaIO would not inflate one stream (uncompressed data, a list of files).
+bool
+CompressedMetaImageData(const std::string & file, MetaImageIO * meta, std::string & data, uintmax_t & offset)
+{
+  if (meta == nullptr || !meta->GetMetaImagePointer()->CompressedData())
+  {
+    return false;
+  }
+  const std::string dataName = meta->GetMetaImagePointer()->ElementDataFileName();
+  if (dataName == "LIST" || dataName.find('%') != std::string::npos || dataName.find(' ') != std::string::npos)
+  {
+    return false;
+  }
+  data = dataName == "LOCAL" ? file : (fs::path(file).parent_path() / dataName).string();
+  offset = dataName == "LOCAL" ? LocalDataOffset(file) : 0;
+  return true;
+}
+
+template <typename T>
+void
+SwapFrom(ImageIOBase::ByteOrder order, void * buffer, SizeValueType count)
+{
+  if (order == ImageIOBase::ByteOrder::BigEndian)
+  {
+    ByteSwapper<T>::SwapRangeFromSystemToBigEndian(static_cast<T *>(buffer), count);
+  }
+  else if (order == ImageIOBase::ByteOrder::LittleEndian)
+  {
+    ByteSwapper<T>::SwapRangeFromSystemToLittleEndian(static_cast<T *>(buffer), count);
+  }
 }
 } // namespace
 
@@ -122,15 +158,15 @@ MetaImageTruncation(const std::string & file, ImageIOBase * io)
   const uintmax_t size = fs::file_size(data, error);
   if (meta->GetMetaImagePointer()->CompressedData())
   {
-    // zlib compresses at best about 1000 to 1: a larger image is not in the file.
+    // zlib compresses at best about 1000 to 1: a larger image is not in the file. The
+    // stream itself is checked as it is read (CheckedMetaImageIO).
     if (!error && static_cast<double>(io->GetImageSizeInBytes()) > DeflateCanHold(static_cast<double>(size)))
     {
       return "cannot read " + file + ": its compressed data file " + data.string() + " of " + std::to_string(size) +
              " bytes cannot hold an image of " + std::to_string(io->GetImageSizeInBytes()) + " bytes";
     }
-    return CompressedStreamProblem(data.string(),
-                                   dataName == "LOCAL" ? LocalDataOffset(file) : 0,
-                                   static_cast<uintmax_t>(io->GetImageSizeInBytes()));
+    return error ? "cannot read " + file + ": its compressed data file " + data.string() + " cannot be opened"
+                 : std::string();
   }
   if (error || size < static_cast<uintmax_t>(io->GetImageSizeInBytes()))
   {
@@ -138,6 +174,19 @@ MetaImageTruncation(const std::string & file, ImageIOBase * io)
            " bytes, the image needs " + std::to_string(io->GetImageSizeInBytes());
   }
   return {};
+}
+
+std::string
+MetaImageStreamProblem(const std::string & file, ImageIOBase * io)
+{
+  std::string data;
+  uintmax_t   offset = 0;
+  if (!CompressedMetaImageData(file, dynamic_cast<MetaImageIO *>(io), data, offset))
+  {
+    return {};
+  }
+  const std::string problem = InflateStream(data, offset, static_cast<uintmax_t>(io->GetImageSizeInBytes()), nullptr);
+  return problem.empty() ? problem : "cannot read " + file + ": " + problem;
 }
 
 std::string
@@ -301,5 +350,61 @@ TruncationProblem(const std::string & file, uintmax_t pixelBytes)
   }
   return {};
 }
+void
+CheckedMetaImageIO::Read(void * buffer)
+{
+  std::string data;
+  uintmax_t   offset = 0;
+  if (!CompressedMetaImageData(m_FileName, this, data, offset))
+  {
+    Superclass::Read(buffer);
+    return;
+  }
+  const auto     bytes = static_cast<uintmax_t>(this->GetImageSizeInBytes());
+  const unsigned dimensions = this->GetNumberOfDimensions();
+  ImageIORegion  whole(dimensions);
+  for (unsigned d = 0; d < dimensions; ++d)
+  {
+    whole.SetIndex(d, 0);
+    whole.SetSize(d, this->GetDimensions(d));
+  }
+  if (!(whole == m_IORegion))
+  {
+    const std::string problem = InflateStream(data, offset, bytes, nullptr);
+    if (!problem.empty())
+    {
+      itkExceptionMacro(<< problem);
+    }
+    Superclass::Read(buffer);
+    return;
+  }
+  const std::string problem = InflateStream(data, offset, bytes, static_cast<unsigned char *>(buffer));
+  if (!problem.empty())
+  {
+    itkExceptionMacro(<< problem);
+  }
+  // MetaIO's own byte order fix (ITK's byte order states the system's), by the components'
+  // size.
+  const SizeValueType count = this->GetImageSizeInComponents();
+  const ByteOrder     order =
+    this->GetMetaImagePointer()->BinaryDataByteOrderMSB() ? ByteOrder::BigEndian : ByteOrder::LittleEndian;
+  switch (this->GetComponentSize())
+  {
+    case 1:
+      break;
+    case 2:
+      SwapFrom<uint16_t>(order, buffer, count);
+      break;
+    case 4:
+      SwapFrom<uint32_t>(order, buffer, count);
+      break;
+    case 8:
+      SwapFrom<uint64_t>(order, buffer, count);
+      break;
+    default:
+      itkExceptionMacro(<< "components of " << this->GetComponentSize() << " bytes are not read");
+  }
+}
+
 } // namespace detail
 } // namespace itk

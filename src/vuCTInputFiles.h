@@ -19,6 +19,7 @@
 #define vuCTInputFiles_h
 
 #include "itkImageIOBase.h"
+#include "itkMetaImageIO.h"
 
 #include "gdcmTrace.h"
 
@@ -127,9 +128,38 @@ ReadImageHeader(const std::string & file);
 
 /** Why a MetaImage cannot hold its voxels, or "": MetaIO reads a short uncompressed data
  * file without failing (it only prints a notice) and leaves the rest of the buffer as it
- * was, so the size of the data file is checked against the header. */
+ * was, so the size of the data file is checked against the header. A compressed data file
+ * is checked here only for its size; its stream is inflated and checked by
+ * CheckedMetaImageIO as it is read. */
 std::string
 MetaImageTruncation(const std::string & file, ImageIOBase * io);
+
+/** Why the compressed data of a MetaImage does not inflate to its image, or "" (also when
+ * its data is not compressed): the whole stream is inflated into a small scratch buffer. */
+std::string
+MetaImageStreamProblem(const std::string & file, ImageIOBase * io);
+
+/** MetaImageIO whose compressed voxels are inflated by zlib's own loop, which stops on a
+ * damaged stream with an error naming the file (MetaIO's inflation loop never ends on some
+ * damaged streams). A whole image is inflated straight into the output buffer, once; a
+ * region of it is read by MetaIO after its stream was inflated here and found whole. */
+class CheckedMetaImageIO : public MetaImageIO
+{
+public:
+  ITK_DISALLOW_COPY_AND_MOVE(CheckedMetaImageIO);
+  using Self = CheckedMetaImageIO;
+  using Superclass = MetaImageIO;
+  using Pointer = SmartPointer<Self>;
+  itkNewMacro(Self);
+  itkTypeMacro(CheckedMetaImageIO, MetaImageIO);
+
+  void
+  Read(void * buffer) override;
+
+protected:
+  CheckedMetaImageIO() = default;
+  ~CheckedMetaImageIO() override = default;
+};
 
 /** Why a NRRD file's data cannot hold the image its header describes, or "": NrrdIO
  * allocates the whole image its header claims before reading a byte of the data. */

@@ -22,7 +22,9 @@
 #include "itkMultiThreaderBase.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <future>
 #include <limits>
 #include <numeric>
 
@@ -239,8 +241,9 @@ public:
 
   // The mean of `slices` on the polar frame about the centre of `centreSlice`, as a fraction
   // of the contrast; with `markNoData`, the samples where the scan holds no data are marked.
+  // With `parallel`, the rays are shared among ITK's threads (not from inside a parallel loop).
   PolarSlice
-  Sample(size_t centreSlice, const std::vector<size_t> & slices, bool markNoData) const
+  Sample(size_t centreSlice, const std::vector<size_t> & slices, bool markNoData, bool parallel = false) const
   {
     PolarSlice polar;
     polar.Rays = m_Frame.Rays;
@@ -259,8 +262,7 @@ public:
     double c[2];
     Centre(centreSlice, c);
     const double air = m_Settings.AirLevel;
-    for (long a = 0; a < m_Frame.Rays; ++a)
-    {
+    auto         sampleRay = [&](long a) {
       const double direction[2] = { std::cos(a * m_Frame.Step), std::sin(a * m_Frame.Step) };
       const auto   row = static_cast<size_t>(a * polar.Samples);
       for (size_t j = 0; j < m_Frame.Samples; ++j)
@@ -278,20 +280,42 @@ public:
           polar.Known[row + j] = 0;
         }
       }
+    };
+    if (parallel)
+    {
+      MultiThreaderBase::New()->ParallelizeArray(
+        0, m_Frame.Rays, [&](SizeValueType a) { sampleRay(static_cast<long>(a)); }, nullptr);
+    }
+    else
+    {
+      for (long a = 0; a < m_Frame.Rays; ++a)
+      {
+        sampleRay(a);
+      }
     }
     return polar;
   }
 
   // Peaks of every ray's profile.
   SliceCrossings
-  FindCrossings(const PolarSlice & polar) const
+  FindCrossings(const PolarSlice & polar, bool parallel = false) const
   {
     SliceCrossings result;
     result.Rays.resize(static_cast<size_t>(m_Frame.Rays));
-    for (long a = 0; a < m_Frame.Rays; ++a)
+    auto findOnRay = [&](SizeValueType a) {
+      const auto begin = polar.Values.begin() + static_cast<long>(a) * polar.Samples;
+      result.Rays[a] = Peaks(std::vector<double>(begin, begin + polar.Samples));
+    };
+    if (parallel)
     {
-      const auto begin = polar.Values.begin() + a * polar.Samples;
-      result.Rays[static_cast<size_t>(a)] = Peaks(std::vector<double>(begin, begin + polar.Samples));
+      MultiThreaderBase::New()->ParallelizeArray(0, static_cast<SizeValueType>(m_Frame.Rays), findOnRay, nullptr);
+    }
+    else
+    {
+      for (long a = 0; a < m_Frame.Rays; ++a)
+      {
+        findOnRay(static_cast<SizeValueType>(a));
+      }
     }
     return result;
   }
@@ -299,8 +323,8 @@ public:
   // The trace of a slice again, turn by turn as minimal paths bounded by the turn before,
   // from a turn of its first trace `reference`; empty where that does not hold (not a
   // spiral, a turn not found). The first trace may have crossed between turns anywhere, so
-  // the turns at a quarter, half and three quarters of it are tried and the trace that
-  // passes through most crossings is kept.
+  // the turns at a quarter, half and three quarters of it are tried (in parallel; not from
+  // inside a parallel loop) and the trace that passes through most crossings is kept.
   Trace
   TracePaths(const PolarSlice & polar, const Trace & reference, const SliceCrossings & crossings) const
   {
@@ -314,20 +338,24 @@ public:
     settings.Width = m_Width;
     settings.Pitch = m_Pitch;
     settings.Voxel = m_Settings.Voxel;
-    const long length = reference.Last() - reference.First;
-    Trace      best;
-    double     bestExplained = -1.0;
-    for (const long quarter : { 2L, 1L, 3L })
+    const long          length = reference.Last() - reference.First;
+    const long          quarters[3] = { 2, 1, 3 };
+    std::vector<Trace>  traces(3);
+    std::vector<double> explained(3, -1.0);
+    MultiThreaderBase::New()->ParallelizeArray(
+      0,
+      3,
+      [&](SizeValueType q) {
+        traces[q] = TraceSpiralPath(polar, reference, reference.First + quarters[q] * length / 4, settings);
+        explained[q] = traces[q].Empty() ? -1.0 : Explained(crossings, traces[q]);
+      },
+      nullptr);
+    size_t best = 0;
+    for (size_t q = 1; q < 3; ++q)
     {
-      Trace        trace = TraceSpiralPath(polar, reference, reference.First + quarter * length / 4, settings);
-      const double explained = trace.Empty() ? -1.0 : Explained(crossings, trace);
-      if (explained > bestExplained)
-      {
-        best = std::move(trace);
-        bestExplained = explained;
-      }
+      best = explained[q] > explained[best] ? q : best;
     }
-    return best;
+    return explained[best] > -1.0 ? traces[best] : Trace{};
   }
 
   // Local maxima of a profile (fraction of the contrast) that rise above air by PeakLevel of the contrast and stand out
@@ -1288,8 +1316,8 @@ TraceRoll(const SheetVolumeView &             volume,
     auto traceAtOffset = [&](double x, double y) {
       tracer.SetOffset(x, y);
       tracer.BuildFrame(material);
-      const PolarSlice polar = tracer.Sample(seed, around(), true);
-      crossings = tracer.FindCrossings(polar);
+      const PolarSlice polar = tracer.Sample(seed, around(), true, true);
+      crossings = tracer.FindCrossings(polar, true);
       tracer.MeasurePitch(crossings);
       seedTrace = tracer.TraceAlone(crossings, seed);
       // The same slice turn by turn as minimal paths (TracePaths), kept where it passes
@@ -1371,12 +1399,13 @@ TraceRoll(const SheetVolumeView &             volume,
   progress(0.1);
 
   // Every slice, outwards from the seed, with the previous slice's trace as prior. The
-  // crossings of a batch of slices are found in parallel.
+  // crossings of a batch of slices are found in parallel; the two directions are independent
+  // and, given two threads or more, traced at the same time (the progress from the calling
+  // thread's).
   std::vector<Tracer::Trace> traces(nz);
-  const size_t               batch = 16;
-  size_t                     done = 0;
-  for (int dir : { +1, -1 })
-  {
+  std::atomic<size_t>        done{ 0 };
+  auto                       traceOutwards = [&](int dir, bool reportProgress) {
+    const size_t  batch = 16;
     Tracer::Trace prior = seedTrace;
     long          rejected = 0;
     for (long q = dir > 0 ? seedIndex : seedIndex - 1; q >= 0 && q < static_cast<long>(material.size());)
@@ -1415,8 +1444,30 @@ TraceRoll(const SheetVolumeView &             volume,
       }
       q += dir * static_cast<long>(slices.size());
       done += slices.size();
-      progress(0.1 + 0.85 * static_cast<double>(done) / static_cast<double>(material.size()));
+      if (reportProgress)
+      {
+        progress(0.1 + 0.85 * static_cast<double>(done) / static_cast<double>(material.size()));
+      }
     }
+  };
+  if (MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
+  {
+    std::future<void> inwards = std::async(std::launch::async, traceOutwards, -1, false);
+    try
+    {
+      traceOutwards(+1, true);
+    }
+    catch (...)
+    {
+      inwards.wait();
+      throw;
+    }
+    inwards.get();
+  }
+  else
+  {
+    traceOutwards(+1, true);
+    traceOutwards(-1, true);
   }
 
   MatchEndsToNeighbours(traces, material, tracer.Frame(), settings.Voxel);

@@ -55,6 +55,7 @@ RegisterInfoCommand(CLI::App & app)
   command->callback([] {
     auto reader = itk::CTVolumeReader::New();
     ConfigureReader(options, path, *reader);
+    reader->VerifyCompressedDataOn();
     reader->UpdateOutputInformation();
     const itk::CTVolumeReader::OutputImageType * image = reader->GetOutput();
 

@@ -32,6 +32,7 @@
 #include "itkLayerStackTexture.h"
 #include "itkLayeredTextureMeshFilter.h"
 #include "itkMassSpringFlatteningMeshFilter.h"
+#include "itkMultiThreaderBase.h"
 #include "itkReadableTextureImageFilter.h"
 #include "itkRescaleIntensityImageFilter.h"
 #include "itkSheetMeshAdaptor.h"
@@ -49,6 +50,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <iostream>
 #include <limits>
 
@@ -603,15 +605,28 @@ WriteResults(const Results & results, const TexturerType & texturer, OutputStagi
                                      (60 * flat.GetNumberOfPoints() + 40 * flat.GetNumberOfTriangles());
     output.RequireSpace(pixels * (4 + 1 + 1 + 4 * layerCountInStack) + meshBytes + (8u << 20));
   }
+  // The TIFF files (the layer stack is the largest output) on a second thread while the rest
+  // is written, given two threads or more.
+  auto writeTiffs = [&]() {
+    WriteImageFile(results.Texture.GetPointer(), staging / "texture.tif");
+    WriteImageFile(results.Layers.GetPointer(), staging / "layers.tif");
+  };
+  std::future<void> tiffs;
+  if (itk::MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
+  {
+    tiffs = std::async(std::launch::async, writeTiffs);
+  }
+  else
+  {
+    writeTiffs();
+  }
   WriteImageFile(results.Texture8.GetPointer(), staging / "texture.png");
-  WriteImageFile(results.Texture.GetPointer(), staging / "texture.tif");
   auto mask8 = itk::RescaleIntensityImageFilter<TextureMaskType, TextureMaskType>::New();
   mask8->SetInput(results.Mask);
   mask8->SetOutputMinimum(0);
   mask8->SetOutputMaximum(255);
   mask8->Update();
   WriteImageFile(mask8->GetOutput(), staging / "mask.png");
-  WriteImageFile(results.Layers.GetPointer(), staging / "layers.tif");
   WriteSheetMeshObj((staging / "surface.obj").string(), results.Surface);
   WriteSheetMeshVtp((staging / "surface.vtp").string(), results.Surface, results.VertexTexture, "texture");
   // Texture coordinates: the flat point's position in texture.png, (0, 0) bottom left.
@@ -621,6 +636,10 @@ WriteResults(const Results & results, const TexturerType & texturer, OutputStagi
     FlatTextureCoordinates(results.Flat, corner, texturer.GetAppliedPixelSize(), textureSize[0], textureSize[1]);
   WriteSheetMeshObj((staging / "flat.obj").string(), results.Flat, uv, "texture.png");
   WritePreview(results.Preview, results.Surface, results.Texture8, staging / "preview.png");
+  if (tiffs.valid())
+  {
+    tiffs.get();
+  }
 }
 
 // Texture NCC against the true ink and OCR of the image a person looks at (texture.png's).
