@@ -30,7 +30,8 @@ namespace itk {
  *    threshold computed on the region that holds the object: a first Otsu threshold over
  *    the whole volume finds the object's bounding box, padded by two voxels, and Otsu's
  *    threshold over that box alone is used, so that an air-only border of any size does
- *    not pull the threshold (itk::OtsuThresholdImageFilter, NumberOfHistogramBins bins);
+ *    not pull the threshold (itk::OtsuThresholdCalculator on NumberOfHistogramBins bins,
+ *    the histogram itk::OtsuThresholdImageFilter would count, counted in parallel);
  * 2. a noisy scan is smoothed first (itk::SmoothingRecursiveGaussianImageFilter) by
  *    DenoisingSigma voxels; automatic by default: SheetIntensityLevels::DenoisingSigma of the
  *    levels below and above the threshold (none at a signal-to-noise ratio of 12 and above,

@@ -23,16 +23,17 @@
 #include "itkBinaryThresholdImageFilter.h"
 #include "itkConnectedComponentImageFilter.h"
 #include "itkImageBoundingRegion.h"
-#include "itkMinimumMaximumImageCalculator.h"
-#include "itkOtsuThresholdImageFilter.h"
+#include "itkOtsuThresholdCalculator.h"
 #include "itkProgressAccumulator.h"
-#include "itkRegionOfInterestImageFilter.h"
 #include "itkRelabelComponentImageFilter.h"
 
 #include "itkSheetMidSurfaceExtractor.h"
 #include "itkSheetSegmentationImageFilter.h"
 #include "itkSmoothingRecursiveGaussianImageFilter.h"
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <vector>
 
 namespace itk {
 template <typename TInputImage, typename TMaskImage>
@@ -55,16 +56,150 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::EnlargeOutputRequestedReg
   output->SetRequestedRegionToLargestPossibleRegion();
 }
 
+namespace SheetSegmentationDetail {
+/** The smallest and largest value in `region` of a 3D image, slice by slice in parallel:
+ * of the finite values, or of all but NaN (as itk::MinimumMaximumImageCalculator finds
+ * them); low > high when there is none. */
+template <typename TImage>
+void
+ValueRange(const TImage * image, const ImageRegion<3> & region, bool finiteOnly, double & low, double & high)
+{
+  const auto          size = region.GetSize();
+  std::vector<double> lows(size[2], std::numeric_limits<double>::infinity()),
+    highs(size[2], -std::numeric_limits<double>::infinity());
+  std::vector<char> any(size[2], 0);
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[2],
+    [&](SizeValueType k) {
+      for (SizeValueType j = 0; j < size[1]; ++j)
+      {
+        auto index = region.GetIndex();
+        index[1] += static_cast<IndexValueType>(j);
+        index[2] += static_cast<IndexValueType>(k);
+        const auto * row = image->GetBufferPointer() + image->ComputeOffset(index);
+        for (SizeValueType i = 0; i < size[0]; ++i)
+        {
+          const auto v = static_cast<double>(row[i]);
+          if (finiteOnly ? std::isfinite(v) : !std::isnan(v))
+          {
+            lows[k] = std::min(lows[k], v);
+            highs[k] = std::max(highs[k], v);
+            any[k] = 1;
+          }
+        }
+      }
+    },
+    nullptr);
+  low = 1.0;
+  high = 0.0;
+  bool found = false;
+  for (SizeValueType k = 0; k < size[2]; ++k)
+  {
+    if (any[k])
+    {
+      low = found ? std::min(low, lows[k]) : lows[k];
+      high = found ? std::max(high, highs[k]) : highs[k];
+      found = true;
+    }
+  }
+}
+
+/** Otsu's threshold of the finite voxels of `region` of a 3D image, on `bins` bins that span
+ * their range as itk::ImageToHistogramFilter spans it (the maximum raised by a hundredth of
+ * a bin, ITK's default marginal scale), found by itk::OtsuThresholdCalculator. The voxels
+ * are counted slice by slice in parallel, each bin found by arithmetic and checked against
+ * the histogram's own bin edges, so the histogram is the one ITK's filter would count. */
+template <typename TImage>
+double
+OtsuThreshold(const TImage * image, const ImageRegion<3> & region, unsigned int bins)
+{
+  using PixelType = typename TImage::PixelType;
+  const auto size = region.GetSize();
+  auto       rowStart = [&](SizeValueType j, SizeValueType k) {
+    auto index = region.GetIndex();
+    index[1] += static_cast<IndexValueType>(j);
+    index[2] += static_cast<IndexValueType>(k);
+    return image->GetBufferPointer() + image->ComputeOffset(index);
+  };
+  double low = 0.0, high = 0.0;
+  ValueRange(image, region, true, low, high);
+  if (!(high > low))
+  {
+    return low <= high ? low : 0.0;
+  }
+  using HistogramType = Statistics::Histogram<double>;
+  auto histogram = HistogramType::New();
+  histogram->SetMeasurementVectorSize(1);
+  HistogramType::SizeType              histogramSize(1);
+  HistogramType::MeasurementVectorType lower(1), upper(1);
+  histogramSize[0] = bins;
+  lower[0] = low;
+  upper[0] = high + (high - low) / static_cast<double>(bins) / 100.0;
+  histogram->Initialize(histogramSize, lower, upper);
+  std::vector<double> edges(bins + 1);
+  for (unsigned int b = 0; b < bins; ++b)
+  {
+    edges[b] = histogram->GetBinMin(0, b);
+  }
+  edges[bins] = histogram->GetBinMax(0, bins - 1);
+  const double width = (upper[0] - lower[0]) / static_cast<double>(bins);
+  // Counts per slice, added in slice order.
+  std::vector<std::vector<SizeValueType>> counts(size[2]);
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[2],
+    [&](SizeValueType k) {
+      std::vector<SizeValueType> & count = counts[k];
+      count.assign(bins, 0);
+      for (SizeValueType j = 0; j < size[1]; ++j)
+      {
+        const PixelType * row = rowStart(j, k);
+        for (SizeValueType i = 0; i < size[0]; ++i)
+        {
+          const auto v = static_cast<double>(row[i]);
+          if (!std::isfinite(v))
+          {
+            continue;
+          }
+          auto b = static_cast<long>((v - lower[0]) / width);
+          b = std::clamp(b, 0L, static_cast<long>(bins) - 1);
+          while (b > 0 && v < edges[b])
+          {
+            --b;
+          }
+          while (b + 1 < static_cast<long>(bins) && v >= edges[b + 1])
+          {
+            ++b;
+          }
+          ++count[static_cast<size_t>(b)];
+        }
+      }
+    },
+    nullptr);
+  for (unsigned int b = 0; b < bins; ++b)
+  {
+    SizeValueType total = 0;
+    for (const auto & count : counts)
+    {
+      total += count[b];
+    }
+    histogram->SetFrequency(b, static_cast<HistogramType::AbsoluteFrequencyType>(total));
+  }
+  auto otsu = OtsuThresholdCalculator<HistogramType, double>::New();
+  otsu->SetInput(histogram);
+  otsu->Update();
+  // As itk::OtsuThresholdImageFilter states it: in the pixel type.
+  return static_cast<double>(static_cast<PixelType>(otsu->GetThreshold()));
+}
+} // namespace SheetSegmentationDetail
+
 template <typename TInputImage, typename TMaskImage>
 double
 SheetSegmentationImageFilter<TInputImage, TMaskImage>::ComputeAutomaticThreshold(const InputImageType * input)
 {
-  using OtsuType = OtsuThresholdImageFilter<InputImageType, MaskImageType>;
-  auto whole = OtsuType::New();
-  whole->SetInput(input);
-  whole->SetNumberOfHistogramBins(m_NumberOfHistogramBins);
-  whole->Update();
-  const double first = static_cast<double>(whole->GetThreshold());
+  const double first =
+    SheetSegmentationDetail::OtsuThreshold(input, input->GetBufferedRegion(), m_NumberOfHistogramBins);
 
   // Bounding box of what lies above the first threshold, padded by two voxels.
   const typename InputImageType::RegionType box = BoundingRegionWhere(
@@ -73,15 +208,7 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::ComputeAutomaticThreshold
   {
     return first;
   }
-  using RoiType = RegionOfInterestImageFilter<InputImageType, InputImageType>;
-  auto roi = RoiType::New();
-  roi->SetInput(input);
-  roi->SetRegionOfInterest(box);
-  auto object = OtsuType::New();
-  object->SetInput(roi->GetOutput());
-  object->SetNumberOfHistogramBins(m_NumberOfHistogramBins);
-  object->Update();
-  return static_cast<double>(object->GetThreshold());
+  return SheetSegmentationDetail::OtsuThreshold(input, box, m_NumberOfHistogramBins);
 }
 
 template <typename TInputImage, typename TMaskImage>
@@ -93,14 +220,11 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
   {
     itkExceptionMacro(<< "the volume is empty");
   }
-  auto range = MinimumMaximumImageCalculator<InputImageType>::New();
-  range->SetImage(input);
-  range->Compute();
-  const double minimum = static_cast<double>(range->GetMinimum());
-  const double maximum = static_cast<double>(range->GetMaximum());
+  double minimum = 0.0, maximum = 0.0;
+  SheetSegmentationDetail::ValueRange(input, input->GetBufferedRegion(), false, minimum, maximum);
   if (minimum > maximum)
   {
-    // The calculator skips NaN: nothing was left to compare.
+    // Only NaN: no value was compared.
     itkExceptionMacro(<< "the volume has no finite voxel (all " << input->GetLargestPossibleRegion().GetNumberOfPixels()
                       << " are NaN): nothing to segment");
   }

@@ -18,6 +18,7 @@
 #include "itkReadableTexture.h"
 #include "itkLayerStackTexture.h"
 #include "itkMacro.h"
+#include "itkMultiThreaderBase.h"
 
 #include <algorithm>
 #include <cmath>
@@ -145,9 +146,16 @@ SelectReadableTexture(const Image<float, 3> * stack, const ReadableTextureSettin
                                                        settings.GaussianSigma,
                                                        core ? selection.CoreWidth : 0.0);
       textures.push_back(denoise(combined));
-      selection.Candidates.push_back({ side, core, LayerStackTexture::InkContrast(textures.back()), 0, 0 });
+      selection.Candidates.push_back({ side, core, 0.0, 0, 0 });
     }
   }
+  // The sides' scores, all at once in parallel (each a few selections over the texture).
+  const size_t scored = selection.FocalSlabs ? selection.Candidates.size() : 0;
+  MultiThreaderBase::New()->ParallelizeArray(
+    scored,
+    selection.Candidates.size(),
+    [&](SizeValueType i) { selection.Candidates[i].Score = LayerStackTexture::InkContrast(textures[i]); },
+    nullptr);
   if (selection.Candidates.empty())
   {
     Fail("SelectReadableTexture: no candidate texture (too few layers for a focal slab)");

@@ -17,11 +17,15 @@
  *=========================================================================*/
 #include "itkConstantPadImageFilter.h"
 #include "itkImageRegionConstIteratorWithIndex.h"
+#include "itkOtsuThresholdImageFilter.h"
+#include "itkRegionOfInterestImageFilter.h"
 #include "itkSheetPhantomSource.h"
 #include "itkSheetSegmentationImageFilter.h"
 #include "vuTestHelpers.h"
 
 #include "gtest/gtest.h"
+
+#include <random>
 
 namespace {
 using VolumeType = itk::Image<float, 3>;
@@ -53,6 +57,55 @@ MakeConstantVolume(float value)
   return volume;
 }
 } // namespace
+
+// The parallel Otsu threshold is ITK's own: the same histogram, the same threshold, on
+// volumes of random sizes, ranges and contents (a seed drawn each run), in whole and in part.
+TEST(SheetSegmentationImageFilter, ParallelOtsuThresholdIsItksOwn)
+{
+  const unsigned int seed = std::random_device{}();
+  std::mt19937       random(seed);
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  for (int trial = 0; trial < 12; ++trial)
+  {
+    auto                               volume = VolumeType::New();
+    std::uniform_int_distribution<int> extent(3, 40);
+    volume->SetRegions(VolumeType::SizeType{ { static_cast<itk::SizeValueType>(extent(random)),
+                                               static_cast<itk::SizeValueType>(extent(random)),
+                                               static_cast<itk::SizeValueType>(extent(random)) } });
+    volume->Allocate();
+    std::uniform_real_distribution<double> level(-2000.0, 2000.0), share(0.05, 0.6), spread(1.0, 400.0);
+    const double air = level(random), sheet = air + std::abs(level(random)) + 1.0, noise = spread(random);
+    std::bernoulli_distribution      inSheet(share(random));
+    std::normal_distribution<double> jitter(0.0, noise);
+    const bool                       integers = trial % 3 == 0;
+    float *                          values = volume->GetBufferPointer();
+    for (size_t i = 0; i < volume->GetBufferedRegion().GetNumberOfPixels(); ++i)
+    {
+      const double v = (inSheet(random) ? sheet : air) + jitter(random);
+      values[i] = static_cast<float>(integers ? std::round(v) : v);
+    }
+    auto reference = itk::OtsuThresholdImageFilter<VolumeType, MaskType>::New();
+    reference->SetInput(volume);
+    reference->SetNumberOfHistogramBins(trial % 2 == 0 ? 256 : 37);
+    reference->Update();
+    EXPECT_EQ(itk::SheetSegmentationDetail::OtsuThreshold(
+                volume.GetPointer(), volume->GetBufferedRegion(), reference->GetNumberOfHistogramBins()),
+              static_cast<double>(reference->GetThreshold()))
+      << "trial " << trial;
+
+    VolumeType::RegionType part = volume->GetBufferedRegion();
+    part.ShrinkByRadius(1);
+    auto crop = itk::RegionOfInterestImageFilter<VolumeType, VolumeType>::New();
+    crop->SetInput(volume);
+    crop->SetRegionOfInterest(part);
+    auto partReference = itk::OtsuThresholdImageFilter<VolumeType, MaskType>::New();
+    partReference->SetInput(crop->GetOutput());
+    partReference->Update();
+    EXPECT_EQ(itk::SheetSegmentationDetail::OtsuThreshold(volume.GetPointer(), part, 256),
+              static_cast<double>(partReference->GetThreshold()))
+      << "trial " << trial << " (part)";
+  }
+}
 
 TEST(SheetSegmentationImageFilter, BasicObjectMethods)
 {
