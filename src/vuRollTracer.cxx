@@ -1291,62 +1291,64 @@ TraceRoll(const SheetVolumeView &             volume,
   {
     return result;
   }
-  Tracer tracer(volume, values, settings);
-
   // Seed: a slice in the middle part of the sheet, traced on the mean profile of its
   // neighbours. Two turns that touch in the seed slice would carry its trace onto the next
   // turn, and every slice after it; a touch covers only part of the width, so three slices
   // (at 50, 30 and 70 % of the sheet's width) are tried and the middle one is kept unless
-  // another's trace passes through clearly more of its crossings.
-  size_t         seed = material[material.size() / 2];
-  SliceCrossings crossings;
-  Tracer::Trace  seedTrace;
-  auto           around = [&]() {
-    std::vector<size_t> slices;
+  // another's trace passes through clearly more of its crossings. Each is traced by a
+  // tracer of its own (its centre, frame and turn spacing), at the same time given two
+  // threads or more.
+  struct Seed
+  {
+    Tracer         SeedTracer;
+    SliceCrossings Crossings;
+    Tracer::Trace  Trace;
+  };
+  auto traceSeed = [&](size_t seed) {
+    Seed                result{ Tracer(volume, values, settings), {}, {} };
+    Tracer &            tracer = result.SeedTracer;
+    std::vector<size_t> around;
     for (size_t k : material)
     {
       if (std::abs(static_cast<long>(k) - static_cast<long>(seed)) <= SeedHalfWidth)
       {
-        slices.push_back(k);
+        around.push_back(k);
       }
     }
-    return slices;
-  };
-  auto traceSeed = [&](size_t candidate) {
     auto traceAtOffset = [&](double x, double y) {
       tracer.SetOffset(x, y);
       tracer.BuildFrame(material);
-      const PolarSlice polar = tracer.Sample(seed, around(), true, true);
-      crossings = tracer.FindCrossings(polar, true);
-      tracer.MeasurePitch(crossings);
-      seedTrace = tracer.TraceAlone(crossings, seed);
+      const PolarSlice polar = tracer.Sample(seed, around, true, true);
+      result.Crossings = tracer.FindCrossings(polar, true);
+      tracer.MeasurePitch(result.Crossings);
+      result.Trace = tracer.TraceAlone(result.Crossings, seed);
       // The same slice turn by turn as minimal paths (TracePaths), kept where it passes
       // through clearly more of the crossings: where the follower crossed onto the next turn
       // at a touch and lost the rest of the one it was on.
-      Tracer::Trace paths = tracer.TracePaths(polar, seedTrace, crossings);
-      if (!paths.Empty() &&
-          tracer.Explained(crossings, paths) > tracer.Explained(crossings, seedTrace) + PathsPreference)
+      Tracer::Trace paths = tracer.TracePaths(polar, result.Trace, result.Crossings);
+      if (!paths.Empty() && tracer.Explained(result.Crossings, paths) >
+                              tracer.Explained(result.Crossings, result.Trace) + PathsPreference)
       {
-        seedTrace = std::move(paths);
+        result.Trace = std::move(paths);
       }
     };
-    seed = candidate;
     traceAtOffset(0.0, 0.0);
     // The centroid line need not pass through the spiral's centre (an irregular roll, a field
     // of view that cuts it): re-centre on the innermost turn and trace again.
-    for (int pass = 0; pass < 2 && !seedTrace.Empty(); ++pass)
+    for (int pass = 0; pass < 2 && !result.Trace.Empty(); ++pass)
     {
-      const long rays = tracer.Frame().Rays;
-      if (seedTrace.Last() - seedTrace.First < 3 * rays / 2)
+      const Tracer::Trace & trace = result.Trace;
+      const long            rays = tracer.Frame().Rays;
+      if (trace.Last() - trace.First < 3 * rays / 2)
       {
         break;
       }
       double mean[2] = { 0.0, 0.0 };
-      for (long m = seedTrace.First; m < seedTrace.First + rays; ++m)
+      for (long m = trace.First; m < trace.First + rays; ++m)
       {
         const double angle = static_cast<double>(m) * tracer.Frame().Step;
-        mean[0] += seedTrace.At(m) * std::cos(angle) / static_cast<double>(rays);
-        mean[1] += seedTrace.At(m) * std::sin(angle) / static_cast<double>(rays);
+        mean[0] += trace.At(m) * std::cos(angle) / static_cast<double>(rays);
+        mean[1] += trace.At(m) * std::sin(angle) / static_cast<double>(rays);
       }
       if (std::hypot(mean[0], mean[1]) < 0.5 * settings.Voxel)
       {
@@ -1354,29 +1356,57 @@ TraceRoll(const SheetVolumeView &             volume,
       }
       traceAtOffset(tracer.GetOffset()[0] + mean[0], tracer.GetOffset()[1] + mean[1]);
     }
+    return result;
   };
-  long   seedIndex = -1, tracedIndex = -1;
-  double bestExplained = -1.0;
+  std::vector<long> candidates;
   for (const double fraction : { 0.5, 0.3, 0.7 })
   {
     const auto index = static_cast<long>(fraction * static_cast<double>(material.size() - 1) + 0.5);
-    if (index == tracedIndex)
+    if (std::find(candidates.begin(), candidates.end(), index) == candidates.end())
     {
-      continue;
+      candidates.push_back(index);
     }
-    traceSeed(material[static_cast<size_t>(index)]);
-    tracedIndex = index;
-    const double explained = seedTrace.Empty() ? -1.0 : tracer.Explained(crossings, seedTrace);
-    if (seedIndex < 0 || explained > bestExplained + SeedPreference)
+  }
+  std::vector<Seed> seeds;
+  if (MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
+  {
+    std::vector<std::future<Seed>> futures;
+    for (const long index : candidates)
     {
-      seedIndex = index;
+      futures.push_back(std::async(std::launch::async, traceSeed, material[static_cast<size_t>(index)]));
+    }
+    for (auto & future : futures)
+    {
+      future.wait();
+    }
+    for (auto & future : futures)
+    {
+      seeds.push_back(future.get());
+    }
+  }
+  else
+  {
+    for (const long index : candidates)
+    {
+      seeds.push_back(traceSeed(material[static_cast<size_t>(index)]));
+    }
+  }
+  size_t chosen = 0;
+  double bestExplained = -1.0;
+  for (size_t c = 0; c < seeds.size(); ++c)
+  {
+    const double explained =
+      seeds[c].Trace.Empty() ? -1.0 : seeds[c].SeedTracer.Explained(seeds[c].Crossings, seeds[c].Trace);
+    if (c == 0 || explained > bestExplained + SeedPreference)
+    {
+      chosen = c;
       bestExplained = explained;
     }
   }
-  if (seedIndex != tracedIndex)
-  {
-    traceSeed(material[static_cast<size_t>(seedIndex)]);
-  }
+  const long             seedIndex = candidates[chosen];
+  const Tracer &         tracer = seeds[chosen].SeedTracer;
+  const SliceCrossings & crossings = seeds[chosen].Crossings;
+  const Tracer::Trace &  seedTrace = seeds[chosen].Trace;
   result.Pitch = tracer.Pitch();
   result.RayThickness = tracer.Width();
   result.CentreOffset[0] = tracer.GetOffset()[0];
