@@ -55,7 +55,6 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GetIntensityImage() const ->
   return dynamic_cast<const IntensityImageType *>(this->ProcessObject::GetInput(1));
 }
 
-
 template <typename TMaskImage, typename TOutputMesh>
 void
 SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
