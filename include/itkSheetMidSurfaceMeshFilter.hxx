@@ -19,8 +19,8 @@
 #define itkSheetMidSurfaceMeshFilter_hxx
 
 #include "itkConnectedComponentImageFilter.h"
-#include "itkImageBoundingRegion.h"
 #include "itkNearestNeighborInterpolateImageFunction.h"
+#include "itkParallelImageRows.h"
 #include "itkRelabelComponentImageFilter.h"
 #include "itkResampleImageFilter.h"
 #include "itkSheetMeshAdaptor.h"
@@ -125,34 +125,22 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     sheetIntensity->Allocate();
   }
   {
-    // Row by row, the slices in parallel.
+    // Row by row, the slices in parallel; the intensities lie where the labels do.
     const auto boxSize = box.GetSize();
-    MultiThreaderBase::New()->ParallelizeArray(
-      0,
-      boxSize[2],
-      [&](SizeValueType k) {
-        for (SizeValueType j = 0; j < boxSize[1]; ++j)
-        {
-          typename LabelImageType::IndexType first = box.GetIndex();
-          first[1] += static_cast<IndexValueType>(j);
-          first[2] += static_cast<IndexValueType>(k);
-          const SizeValueType   from = labels->ComputeOffset(first);
-          const SizeValueType   to = (k * boxSize[1] + j) * boxSize[0];
-          const SizeValueType * label = labels->GetBufferPointer() + from;
-          uint8_t *             out = sheetMask->GetBufferPointer() + to;
-          for (SizeValueType i = 0; i < boxSize[0]; ++i)
-          {
-            out[i] = label[i] == 1 ? 1 : 0;
-          }
-          if (intensity != nullptr)
-          {
-            std::copy_n(intensity->GetBufferPointer() + intensity->ComputeOffset(first),
-                        boxSize[0],
-                        sheetIntensity->GetBufferPointer() + to);
-          }
-        }
-      },
-      nullptr);
+    ForEachImageRow(labels, box, [&](SizeValueType k, SizeValueType j, const SizeValueType * label) {
+      const SizeValueType to = (k * boxSize[1] + j) * boxSize[0];
+      uint8_t *           out = sheetMask->GetBufferPointer() + to;
+      for (SizeValueType i = 0; i < boxSize[0]; ++i)
+      {
+        out[i] = label[i] == 1 ? 1 : 0;
+      }
+      if (intensity != nullptr)
+      {
+        std::copy_n(intensity->GetBufferPointer() + (label - labels->GetBufferPointer()),
+                    boxSize[0],
+                    sheetIntensity->GetBufferPointer() + to);
+      }
+    });
   }
   typename SheetImageType::Pointer sheetData;
   const bool                       axisKnown = this->AlignWithRollAxis(sheetMask, sheetIntensity, sheetData, warnings);
@@ -261,47 +249,40 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxis(const Sheet
   const size_t    strides[3] = { 1, size[0], size[0] * size[1] };
   // Slice by slice in parallel, then summed in slice order (the same sum on any number of
   // threads).
-  std::vector<std::array<double, 9>> sliceTensors(size[2]);
-  MultiThreaderBase::New()->ParallelizeArray(
-    0,
-    size[2],
-    [&](SizeValueType k) {
+  std::vector<std::array<double, 9>> sliceTensors(size[2], std::array<double, 9>{});
+  ForEachImageRow(
+    sheetMask, sheetMask->GetBufferedRegion(), [&](SizeValueType k, SizeValueType j, const uint8_t * row) {
       std::array<double, 9> & sum = sliceTensors[k];
-      sum.fill(0.0);
-      size_t offset = k * strides[2];
-      for (size_t j = 0; j < size[1]; ++j)
+      size_t                  offset = static_cast<size_t>(row - mask);
+      for (size_t i = 0; i < size[0]; ++i, ++offset)
       {
-        for (size_t i = 0; i < size[0]; ++i, ++offset)
+        if (row[i] == 0)
         {
-          if (mask[offset] == 0)
+          continue;
+        }
+        const size_t index[3] = { i, j, k };
+        double       gradient[3];
+        for (unsigned d = 0; d < 3; ++d)
+        {
+          const size_t below = index[d] > 0 ? offset - strides[d] : offset;
+          const size_t above = index[d] + 1 < size[d] ? offset + strides[d] : offset;
+          const double steps = static_cast<double>(above - below) / static_cast<double>(strides[d]);
+          gradient[d] = steps > 0.0 ? (smooth[above] - smooth[below]) / (steps * spacing[d]) : 0.0;
+        }
+        double physical[3];
+        for (unsigned r = 0; r < 3; ++r)
+        {
+          physical[r] = direction[r][0] * gradient[0] + direction[r][1] * gradient[1] + direction[r][2] * gradient[2];
+        }
+        for (unsigned r = 0; r < 3; ++r)
+        {
+          for (unsigned c = 0; c < 3; ++c)
           {
-            continue;
-          }
-          const size_t index[3] = { i, j, k };
-          double       gradient[3];
-          for (unsigned d = 0; d < 3; ++d)
-          {
-            const size_t below = index[d] > 0 ? offset - strides[d] : offset;
-            const size_t above = index[d] + 1 < size[d] ? offset + strides[d] : offset;
-            const double steps = static_cast<double>(above - below) / static_cast<double>(strides[d]);
-            gradient[d] = steps > 0.0 ? (smooth[above] - smooth[below]) / (steps * spacing[d]) : 0.0;
-          }
-          double physical[3];
-          for (unsigned r = 0; r < 3; ++r)
-          {
-            physical[r] = direction[r][0] * gradient[0] + direction[r][1] * gradient[1] + direction[r][2] * gradient[2];
-          }
-          for (unsigned r = 0; r < 3; ++r)
-          {
-            for (unsigned c = 0; c < 3; ++c)
-            {
-              sum[3 * r + c] += physical[r] * physical[c];
-            }
+            sum[3 * r + c] += physical[r] * physical[c];
           }
         }
       }
-    },
-    nullptr);
+    });
   vnl_matrix<double> tensor(3, 3, 0.0);
   for (const auto & sum : sliceTensors)
   {
@@ -346,25 +327,18 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxisFromCentroid
   // with material: slices near the ends of a tilted roll cut it partly, which biases them.
   const auto          size = sheetMask->GetBufferedRegion().GetSize();
   std::vector<double> count(size[2], 0.0), sumI(size[2], 0.0), sumJ(size[2], 0.0);
-  MultiThreaderBase::New()->ParallelizeArray(
-    0,
-    size[2],
-    [&](SizeValueType k) {
-      const uint8_t * mask = sheetMask->GetBufferPointer() + k * size[0] * size[1];
-      for (size_t j = 0; j < size[1]; ++j)
+  ForEachImageRow(
+    sheetMask, sheetMask->GetBufferedRegion(), [&](SizeValueType k, SizeValueType j, const uint8_t * row) {
+      for (size_t i = 0; i < size[0]; ++i)
       {
-        for (size_t i = 0; i < size[0]; ++i)
+        if (row[i] != 0)
         {
-          if (mask[j * size[0] + i] != 0)
-          {
-            count[k] += 1.0;
-            sumI[k] += static_cast<double>(i);
-            sumJ[k] += static_cast<double>(j);
-          }
+          count[k] += 1.0;
+          sumI[k] += static_cast<double>(i);
+          sumJ[k] += static_cast<double>(j);
         }
       }
-    },
-    nullptr);
+    });
   long first = -1, last = -1;
   for (size_t k = 0; k < size[2]; ++k)
   {

@@ -113,8 +113,10 @@ protected:
   GenerateData() override;
 
 private:
+  /** Otsu's threshold of the object's box, the volume's finite values ranging from
+   * `minimum` to `maximum`. */
   double
-  ComputeAutomaticThreshold(const InputImageType * input);
+  ComputeAutomaticThreshold(const InputImageType * input, double minimum, double maximum);
 
   bool          m_AutomaticThreshold{ true };
   double        m_Threshold{ 0.0 };

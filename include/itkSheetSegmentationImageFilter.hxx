@@ -22,8 +22,8 @@
 #include "itkBinaryMorphologicalClosingImageFilter.h"
 #include "itkBinaryThresholdImageFilter.h"
 #include "itkConnectedComponentImageFilter.h"
-#include "itkImageBoundingRegion.h"
 #include "itkOtsuThresholdCalculator.h"
+#include "itkParallelImageRows.h"
 #include "itkProgressAccumulator.h"
 #include "itkRelabelComponentImageFilter.h"
 
@@ -64,66 +64,43 @@ template <typename TImage>
 void
 ValueRange(const TImage * image, const ImageRegion<3> & region, bool finiteOnly, double & low, double & high)
 {
-  const auto          size = region.GetSize();
-  std::vector<double> lows(size[2], std::numeric_limits<double>::infinity()),
-    highs(size[2], -std::numeric_limits<double>::infinity());
-  std::vector<char> any(size[2], 0);
-  MultiThreaderBase::New()->ParallelizeArray(
-    0,
-    size[2],
-    [&](SizeValueType k) {
-      for (SizeValueType j = 0; j < size[1]; ++j)
-      {
-        auto index = region.GetIndex();
-        index[1] += static_cast<IndexValueType>(j);
-        index[2] += static_cast<IndexValueType>(k);
-        const auto * row = image->GetBufferPointer() + image->ComputeOffset(index);
-        for (SizeValueType i = 0; i < size[0]; ++i)
-        {
-          const auto v = static_cast<double>(row[i]);
-          if (finiteOnly ? std::isfinite(v) : !std::isnan(v))
-          {
-            lows[k] = std::min(lows[k], v);
-            highs[k] = std::max(highs[k], v);
-            any[k] = 1;
-          }
-        }
-      }
-    },
-    nullptr);
-  low = 1.0;
-  high = 0.0;
-  bool found = false;
-  for (SizeValueType k = 0; k < size[2]; ++k)
-  {
-    if (any[k])
+  const auto          width = region.GetSize()[0];
+  const auto          slices = region.GetSize()[2];
+  std::vector<double> lows(slices, std::numeric_limits<double>::infinity()),
+    highs(slices, -std::numeric_limits<double>::infinity());
+  ForEachImageRow(image, region, [&](SizeValueType k, SizeValueType, const auto * row) {
+    for (SizeValueType i = 0; i < width; ++i)
     {
-      low = found ? std::min(low, lows[k]) : lows[k];
-      high = found ? std::max(high, highs[k]) : highs[k];
-      found = true;
+      const auto v = static_cast<double>(row[i]);
+      if (finiteOnly ? std::isfinite(v) : !std::isnan(v))
+      {
+        lows[k] = std::min(lows[k], v);
+        highs[k] = std::max(highs[k], v);
+      }
     }
+  });
+  // A slice without such a value keeps +inf / -inf, which min and max pass over; an
+  // infinite value of the image (finiteOnly off) wins over them as it should.
+  low = slices > 0 ? *std::min_element(lows.begin(), lows.end()) : 1.0;
+  high = slices > 0 ? *std::max_element(highs.begin(), highs.end()) : 0.0;
+  if (low > high)
+  {
+    low = 1.0;
+    high = 0.0;
   }
 }
 
-/** Otsu's threshold of the finite voxels of `region` of a 3D image, on `bins` bins that span
- * their range as itk::ImageToHistogramFilter spans it (the maximum raised by a hundredth of
- * a bin, ITK's default marginal scale), found by itk::OtsuThresholdCalculator. The voxels
- * are counted slice by slice in parallel, each bin found by arithmetic and checked against
- * the histogram's own bin edges, so the histogram is the one ITK's filter would count. */
+/** Otsu's threshold of the finite voxels of `region` of a 3D image, whose finite values
+ * range from `low` to `high`, on `bins` bins that span that range as
+ * itk::ImageToHistogramFilter spans it (the maximum raised by a hundredth of a bin, ITK's
+ * default marginal scale), found by itk::OtsuThresholdCalculator. The voxels are counted
+ * slice by slice in parallel, each bin found by arithmetic and checked against the
+ * histogram's own bin edges, so the histogram is the one ITK's filter would count. */
 template <typename TImage>
 double
-OtsuThreshold(const TImage * image, const ImageRegion<3> & region, unsigned int bins)
+OtsuThreshold(const TImage * image, const ImageRegion<3> & region, unsigned int bins, double low, double high)
 {
   using PixelType = typename TImage::PixelType;
-  const auto size = region.GetSize();
-  auto       rowStart = [&](SizeValueType j, SizeValueType k) {
-    auto index = region.GetIndex();
-    index[1] += static_cast<IndexValueType>(j);
-    index[2] += static_cast<IndexValueType>(k);
-    return image->GetBufferPointer() + image->ComputeOffset(index);
-  };
-  double low = 0.0, high = 0.0;
-  ValueRange(image, region, true, low, high);
   if (!(high > low))
   {
     return low <= high ? low : 0.0;
@@ -145,38 +122,29 @@ OtsuThreshold(const TImage * image, const ImageRegion<3> & region, unsigned int 
   edges[bins] = histogram->GetBinMax(0, bins - 1);
   const double width = (upper[0] - lower[0]) / static_cast<double>(bins);
   // Counts per slice, added in slice order.
-  std::vector<std::vector<SizeValueType>> counts(size[2]);
-  MultiThreaderBase::New()->ParallelizeArray(
-    0,
-    size[2],
-    [&](SizeValueType k) {
-      std::vector<SizeValueType> & count = counts[k];
-      count.assign(bins, 0);
-      for (SizeValueType j = 0; j < size[1]; ++j)
+  const auto                              rowLength = region.GetSize()[0];
+  std::vector<std::vector<SizeValueType>> counts(region.GetSize()[2], std::vector<SizeValueType>(bins, 0));
+  ForEachImageRow(image, region, [&](SizeValueType k, SizeValueType, const PixelType * row) {
+    std::vector<SizeValueType> & count = counts[k];
+    for (SizeValueType i = 0; i < rowLength; ++i)
+    {
+      const auto v = static_cast<double>(row[i]);
+      if (!std::isfinite(v))
       {
-        const PixelType * row = rowStart(j, k);
-        for (SizeValueType i = 0; i < size[0]; ++i)
-        {
-          const auto v = static_cast<double>(row[i]);
-          if (!std::isfinite(v))
-          {
-            continue;
-          }
-          auto b = static_cast<long>((v - lower[0]) / width);
-          b = std::clamp(b, 0L, static_cast<long>(bins) - 1);
-          while (b > 0 && v < edges[b])
-          {
-            --b;
-          }
-          while (b + 1 < static_cast<long>(bins) && v >= edges[b + 1])
-          {
-            ++b;
-          }
-          ++count[static_cast<size_t>(b)];
-        }
+        continue;
       }
-    },
-    nullptr);
+      auto b = std::clamp(static_cast<long>((v - lower[0]) / width), 0L, static_cast<long>(bins) - 1);
+      while (b > 0 && v < edges[b])
+      {
+        --b;
+      }
+      while (b + 1 < static_cast<long>(bins) && v >= edges[b + 1])
+      {
+        ++b;
+      }
+      ++count[static_cast<size_t>(b)];
+    }
+  });
   for (unsigned int b = 0; b < bins; ++b)
   {
     SizeValueType total = 0;
@@ -192,14 +160,26 @@ OtsuThreshold(const TImage * image, const ImageRegion<3> & region, unsigned int 
   // As itk::OtsuThresholdImageFilter states it: in the pixel type.
   return static_cast<double>(static_cast<PixelType>(otsu->GetThreshold()));
 }
+
+/** OtsuThreshold over the finite values of `region`, their range found first. */
+template <typename TImage>
+double
+OtsuThreshold(const TImage * image, const ImageRegion<3> & region, unsigned int bins)
+{
+  double low = 0.0, high = 0.0;
+  ValueRange(image, region, true, low, high);
+  return OtsuThreshold(image, region, bins, low, high);
+}
 } // namespace SheetSegmentationDetail
 
 template <typename TInputImage, typename TMaskImage>
 double
-SheetSegmentationImageFilter<TInputImage, TMaskImage>::ComputeAutomaticThreshold(const InputImageType * input)
+SheetSegmentationImageFilter<TInputImage, TMaskImage>::ComputeAutomaticThreshold(const InputImageType * input,
+                                                                                 double                 minimum,
+                                                                                 double                 maximum)
 {
-  const double first =
-    SheetSegmentationDetail::OtsuThreshold(input, input->GetBufferedRegion(), m_NumberOfHistogramBins);
+  const double first = SheetSegmentationDetail::OtsuThreshold(
+    input, input->GetBufferedRegion(), m_NumberOfHistogramBins, minimum, maximum);
 
   // Bounding box of what lies above the first threshold, padded by two voxels.
   const typename InputImageType::RegionType box = BoundingRegionWhere(
@@ -239,7 +219,7 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
   }
   if (m_AutomaticThreshold)
   {
-    m_Threshold = ComputeAutomaticThreshold(input);
+    m_Threshold = ComputeAutomaticThreshold(input, minimum, maximum);
   }
   if (!(maximum >= m_Threshold))
   {

@@ -422,7 +422,11 @@ std::string
 CTVolumeReader::FindUnreadableFile() const
 {
   // The series reader does not say which slice failed: read them one by one to find it.
-  for (size_t i = m_FirstSliceToRead; i < m_EndSliceToRead && m_SliceFileNames.size() > 1; ++i)
+  if (m_SliceFileNames.size() == 1)
+  {
+    return m_FileName;
+  }
+  for (size_t i = m_FirstSliceToRead; i < m_EndSliceToRead; ++i)
   {
     auto reader = NewFileReader(m_SliceFileNames[i], m_IsDicom);
     try

@@ -24,7 +24,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <future>
 #include <limits>
 #include <vector>
 
@@ -284,22 +283,10 @@ LayerStackTexture::InkContrast(const TextureType * texture)
   {
     return 0.0;
   }
-  // The top rank from a copy on a second thread (given two), while the median and the
-  // spread are found.
-  std::future<double> top;
-  if (MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
-  {
-    top = std::async(std::launch::async, [copy = values]() mutable { return Rank(copy, 0.99); });
-  }
-  else
-  {
-    std::promise<double> now;
-    now.set_value(Rank(values, 0.99));
-    top = now.get_future();
-  }
+  const double top = Rank(values, 0.99);
   const double median = Rank(values, 0.5);
   const double spread = Spread(values, median);
-  return spread > 0.0 ? (top.get() - median) / spread : 0.0;
+  return spread > 0.0 ? (top - median) / spread : 0.0;
 }
 
 LayerStackTexture::TextureType::Pointer

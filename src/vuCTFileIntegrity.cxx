@@ -106,15 +106,11 @@ InflateStream(const std::string & file, uintmax_t offset, uintmax_t bytes, unsig
   return {};
 }
 
-// Where the compressed voxels of a MetaImage lie: its data file and the offset in it; false
-// when MetaIO would not inflate one stream (uncompressed data, a list of files).
+// Where the voxels of a MetaImage lie: its data file and the offset in it; false when they
+// are not in one file (a list of files, a file name pattern).
 bool
-CompressedMetaImageData(const std::string & file, MetaImageIO * meta, std::string & data, uintmax_t & offset)
+MetaImageDataFile(const std::string & file, MetaImageIO * meta, std::string & data, uintmax_t & offset)
 {
-  if (meta == nullptr || !meta->GetMetaImagePointer()->CompressedData())
-  {
-    return false;
-  }
   const std::string dataName = meta->GetMetaImagePointer()->ElementDataFileName();
   if (dataName == "LIST" || dataName.find('%') != std::string::npos || dataName.find(' ') != std::string::npos)
   {
@@ -123,6 +119,14 @@ CompressedMetaImageData(const std::string & file, MetaImageIO * meta, std::strin
   data = dataName == "LOCAL" ? file : (fs::path(file).parent_path() / dataName).string();
   offset = dataName == "LOCAL" ? LocalDataOffset(file) : 0;
   return true;
+}
+
+// MetaImageDataFile of a MetaImage whose voxels MetaIO would inflate as one stream.
+bool
+CompressedMetaImageData(const std::string & file, MetaImageIO * meta, std::string & data, uintmax_t & offset)
+{
+  return meta != nullptr && meta->GetMetaImagePointer()->CompressedData() &&
+         MetaImageDataFile(file, meta, data, offset);
 }
 
 template <typename T>
@@ -148,12 +152,13 @@ MetaImageTruncation(const std::string & file, ImageIOBase * io)
   {
     return {};
   }
-  const std::string dataName = meta->GetMetaImagePointer()->ElementDataFileName();
-  if (dataName == "LIST" || dataName.find('%') != std::string::npos || dataName.find(' ') != std::string::npos)
+  std::string dataFile;
+  uintmax_t   offset = 0;
+  if (!MetaImageDataFile(file, meta, dataFile, offset))
   {
     return {};
   }
-  const fs::path  data = dataName == "LOCAL" ? fs::path(file) : fs::path(file).parent_path() / dataName;
+  const fs::path  data = dataFile;
   std::error_code error;
   const uintmax_t size = fs::file_size(data, error);
   if (meta->GetMetaImagePointer()->CompressedData())

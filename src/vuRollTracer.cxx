@@ -24,9 +24,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <future>
 #include <limits>
 #include <numeric>
+#include <optional>
+#include <thread>
 
 namespace itk {
 namespace RollTracing {
@@ -77,6 +80,69 @@ struct LineFit
     return denominator > 0.0;
   }
 };
+
+// f(0) ... f(count - 1), shared among ITK's threads when `parallel` (never from inside a
+// parallel loop: ITK's pool would wait on itself).
+template <typename TFunction>
+void
+ForEachIndex(long count, bool parallel, TFunction f)
+{
+  if (parallel)
+  {
+    MultiThreaderBase::New()->ParallelizeArray(
+      0, static_cast<SizeValueType>(count), [&](SizeValueType i) { f(static_cast<long>(i)); }, nullptr);
+    return;
+  }
+  for (long i = 0; i < count; ++i)
+  {
+    f(i);
+  }
+}
+
+// Runs every task: given two ITK threads or more, the first on the calling thread and each
+// other on a thread of its own, at the same time; otherwise one after another. An exception
+// is passed on once every task has ended.
+void
+RunTogether(const std::vector<std::function<void()>> & tasks)
+{
+  if (MultiThreaderBase::GetGlobalDefaultNumberOfThreads() < 2)
+  {
+    for (const auto & task : tasks)
+    {
+      task();
+    }
+    return;
+  }
+  std::vector<std::future<void>> others;
+  for (size_t t = 1; t < tasks.size(); ++t)
+  {
+    others.push_back(std::async(std::launch::async, tasks[t]));
+  }
+  std::exception_ptr failure;
+  try
+  {
+    tasks.front()();
+  }
+  catch (...)
+  {
+    failure = std::current_exception();
+  }
+  for (auto & other : others)
+  {
+    try
+    {
+      other.get();
+    }
+    catch (...)
+    {
+      failure = failure ? failure : std::current_exception();
+    }
+  }
+  if (failure)
+  {
+    std::rethrow_exception(failure);
+  }
+}
 
 // Bilinear samples of one slice of the intensities (mm of the view's frame).
 class ValueSlice
@@ -281,18 +347,7 @@ public:
         }
       }
     };
-    if (parallel)
-    {
-      MultiThreaderBase::New()->ParallelizeArray(
-        0, m_Frame.Rays, [&](SizeValueType a) { sampleRay(static_cast<long>(a)); }, nullptr);
-    }
-    else
-    {
-      for (long a = 0; a < m_Frame.Rays; ++a)
-      {
-        sampleRay(a);
-      }
-    }
+    ForEachIndex(m_Frame.Rays, parallel, sampleRay);
     return polar;
   }
 
@@ -302,21 +357,10 @@ public:
   {
     SliceCrossings result;
     result.Rays.resize(static_cast<size_t>(m_Frame.Rays));
-    auto findOnRay = [&](SizeValueType a) {
-      const auto begin = polar.Values.begin() + static_cast<long>(a) * polar.Samples;
-      result.Rays[a] = Peaks(std::vector<double>(begin, begin + polar.Samples));
-    };
-    if (parallel)
-    {
-      MultiThreaderBase::New()->ParallelizeArray(0, static_cast<SizeValueType>(m_Frame.Rays), findOnRay, nullptr);
-    }
-    else
-    {
-      for (long a = 0; a < m_Frame.Rays; ++a)
-      {
-        findOnRay(static_cast<SizeValueType>(a));
-      }
-    }
+    ForEachIndex(m_Frame.Rays, parallel, [&](long a) {
+      const auto begin = polar.Values.begin() + a * polar.Samples;
+      result.Rays[static_cast<size_t>(a)] = Peaks(std::vector<double>(begin, begin + polar.Samples));
+    });
     return result;
   }
 
@@ -1367,29 +1411,17 @@ TraceRoll(const SheetVolumeView &             volume,
       candidates.push_back(index);
     }
   }
-  std::vector<Seed> seeds;
-  if (MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
+  std::vector<std::optional<Seed>>   traced(candidates.size());
+  std::vector<std::function<void()>> seedTasks;
+  for (size_t c = 0; c < candidates.size(); ++c)
   {
-    std::vector<std::future<Seed>> futures;
-    for (const long index : candidates)
-    {
-      futures.push_back(std::async(std::launch::async, traceSeed, material[static_cast<size_t>(index)]));
-    }
-    for (auto & future : futures)
-    {
-      future.wait();
-    }
-    for (auto & future : futures)
-    {
-      seeds.push_back(future.get());
-    }
+    seedTasks.emplace_back([&, c]() { traced[c].emplace(traceSeed(material[static_cast<size_t>(candidates[c])])); });
   }
-  else
+  RunTogether(seedTasks);
+  std::vector<Seed> seeds;
+  for (auto & seed : traced)
   {
-    for (const long index : candidates)
-    {
-      seeds.push_back(traceSeed(material[static_cast<size_t>(index)]));
-    }
+    seeds.push_back(std::move(*seed));
   }
   size_t chosen = 0;
   double bestExplained = -1.0;
@@ -1434,7 +1466,8 @@ TraceRoll(const SheetVolumeView &             volume,
   // thread's).
   std::vector<Tracer::Trace> traces(nz);
   std::atomic<size_t>        done{ 0 };
-  auto                       traceOutwards = [&](int dir, bool reportProgress) {
+  const std::thread::id      caller = std::this_thread::get_id();
+  auto                       traceOutwards = [&](int dir) {
     const size_t  batch = 16;
     Tracer::Trace prior = seedTrace;
     long          rejected = 0;
@@ -1474,31 +1507,13 @@ TraceRoll(const SheetVolumeView &             volume,
       }
       q += dir * static_cast<long>(slices.size());
       done += slices.size();
-      if (reportProgress)
+      if (std::this_thread::get_id() == caller)
       {
         progress(0.1 + 0.85 * static_cast<double>(done) / static_cast<double>(material.size()));
       }
     }
   };
-  if (MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
-  {
-    std::future<void> inwards = std::async(std::launch::async, traceOutwards, -1, false);
-    try
-    {
-      traceOutwards(+1, true);
-    }
-    catch (...)
-    {
-      inwards.wait();
-      throw;
-    }
-    inwards.get();
-  }
-  else
-  {
-    traceOutwards(+1, true);
-    traceOutwards(-1, true);
-  }
+  RunTogether({ [&]() { traceOutwards(+1); }, [&]() { traceOutwards(-1); } });
 
   MatchEndsToNeighbours(traces, material, tracer.Frame(), settings.Voxel);
   result.Incomplete = DropIncompleteTraces(traces, material, tracer.Frame(), settings.Voxel);

@@ -116,6 +116,20 @@ private:
     QTRY_VERIFY_WITH_TIMEOUT(!m_Window->IsBusy(), milliseconds);
   }
 
+  // Starts the simulation with `integrator` on its automatic time step, not flattening when
+  // the sheet hangs still; returns the controls set.
+  vu::SimulationControls
+  StartWith(itk::MassSpringIntegratorEnum integrator)
+  {
+    vu::SimulationControls controls = m_Window->GetControls();
+    controls.Integrator = integrator;
+    controls.TimeStep = 0.0;
+    controls.AutoAdvance = false;
+    m_Window->SetControls(controls);
+    m_Window->StartSimulation();
+    return controls;
+  }
+
 private slots:
   void
   initTestCase()
@@ -231,12 +245,7 @@ private slots:
   unrollsWithRk4SwitchesToImplicitAndFlattens()
   {
     const auto             locks = m_Window->GetLockedParticles();
-    vu::SimulationControls controls = m_Window->GetControls();
-    controls.Integrator = itk::MassSpringIntegratorEnum::RungeKutta4;
-    controls.TimeStep = 0.0;
-    controls.AutoAdvance = false;
-    m_Window->SetControls(controls);
-    m_Window->StartSimulation();
+    vu::SimulationControls controls = StartWith(itk::MassSpringIntegratorEnum::RungeKutta4);
     QTRY_VERIFY_WITH_TIMEOUT(m_Window->GetSnapshot().Step > 200, 60000);
     QCOMPARE(m_Window->GetSnapshot().Integrator, itk::MassSpringIntegratorEnum::RungeKutta4);
     // Lock and release while it runs.
@@ -328,12 +337,7 @@ private slots:
   divergenceIsShownAndRecovered()
   {
     m_Window->ResetSimulation();
-    vu::SimulationControls controls = m_Window->GetControls();
-    controls.Integrator = itk::MassSpringIntegratorEnum::SymplecticEuler;
-    controls.TimeStep = 0.0;
-    controls.AutoAdvance = false;
-    m_Window->SetControls(controls);
-    m_Window->StartSimulation();
+    vu::SimulationControls controls = StartWith(itk::MassSpringIntegratorEnum::SymplecticEuler);
     QTRY_VERIFY_WITH_TIMEOUT(m_Window->GetSnapshot().Step > 300, 60000);
     const double stable = m_Window->GetSnapshot().TimeStep;
     controls.TimeStep = 40.0 * stable;

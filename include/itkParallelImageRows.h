@@ -15,8 +15,8 @@
  *  limitations under the License.
  *
  *=========================================================================*/
-#ifndef itkImageBoundingRegion_h
-#define itkImageBoundingRegion_h
+#ifndef itkParallelImageRows_h
+#define itkParallelImageRows_h
 
 #include "itkImageRegion.h"
 #include "itkMultiThreaderBase.h"
@@ -25,20 +25,43 @@
 #include <vector>
 
 namespace itk {
+/** Calls `visit(k, j, row)` for every row of `region` (a part of a 3D image's buffered
+ * region): k and j count the region's slices and rows from 0, `row` points at the row's
+ * first voxel in the buffer. The slices are shared among ITK's threads; a slice's rows are
+ * visited in order by one thread, so state kept per slice (indexed by k) needs no lock and
+ * sums over the slices taken in slice order are the same on any number of threads. */
+template <typename TImage, typename TVisit>
+void
+ForEachImageRow(TImage * image, const ImageRegion<3> & region, TVisit visit)
+{
+  static_assert(TImage::ImageDimension == 3, "a 3D image");
+  const auto size = region.GetSize();
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[2],
+    [&](SizeValueType k) {
+      for (SizeValueType j = 0; j < size[1]; ++j)
+      {
+        auto index = region.GetIndex();
+        index[1] += static_cast<IndexValueType>(j);
+        index[2] += static_cast<IndexValueType>(k);
+        visit(k, j, image->GetBufferPointer() + image->ComputeOffset(index));
+      }
+    },
+    nullptr);
+}
+
 /** The smallest region of a 3D image's buffered region holding every voxel whose value
  * satisfies `inside`, grown by `margin` voxels on every side and cropped to the buffered
- * region; a region of size 0 when no voxel does. The slices are examined in parallel on
- * ITK's threads, each row from both ends, so a thin object in a large volume costs little
- * more than reading its rows' ends. */
+ * region; a region of size 0 when no voxel does. Rows are examined from both ends, the
+ * slices in parallel (ForEachImageRow). */
 template <typename TImage, typename TPredicate>
 ImageRegion<3>
 BoundingRegionWhere(const TImage * image, TPredicate inside, long margin)
 {
-  static_assert(TImage::ImageDimension == 3, "a 3D image");
   const ImageRegion<3> region = image->GetBufferedRegion();
   const auto           size = region.GetSize();
-  const long           nx = static_cast<long>(size[0]), ny = static_cast<long>(size[1]);
-  const auto *         buffer = image->GetBufferPointer();
+  const long           nx = static_cast<long>(size[0]);
   struct SliceBox
   {
     bool Any{ false };
@@ -46,36 +69,28 @@ BoundingRegionWhere(const TImage * image, TPredicate inside, long margin)
     long Upper[2]{ 0, 0 };
   };
   std::vector<SliceBox> slices(size[2]);
-  MultiThreaderBase::New()->ParallelizeArray(
-    0,
-    size[2],
-    [&](SizeValueType k) {
-      SliceBox & box = slices[k];
-      for (long j = 0; j < ny; ++j)
-      {
-        const auto * row = buffer + (static_cast<long>(k) * ny + j) * nx;
-        long         first = 0;
-        while (first < nx && !inside(row[first]))
-        {
-          ++first;
-        }
-        if (first == nx)
-        {
-          continue;
-        }
-        long last = nx - 1;
-        while (!inside(row[last]))
-        {
-          --last;
-        }
-        box.Lower[0] = box.Any ? std::min(box.Lower[0], first) : first;
-        box.Upper[0] = box.Any ? std::max(box.Upper[0], last) : last;
-        box.Lower[1] = box.Any ? box.Lower[1] : j;
-        box.Upper[1] = j;
-        box.Any = true;
-      }
-    },
-    nullptr);
+  ForEachImageRow(image, region, [&](SizeValueType k, SizeValueType j, const auto * row) {
+    long first = 0;
+    while (first < nx && !inside(row[first]))
+    {
+      ++first;
+    }
+    if (first == nx)
+    {
+      return;
+    }
+    long last = nx - 1;
+    while (!inside(row[last]))
+    {
+      --last;
+    }
+    SliceBox & box = slices[k];
+    box.Lower[0] = box.Any ? std::min(box.Lower[0], first) : first;
+    box.Upper[0] = box.Any ? std::max(box.Upper[0], last) : last;
+    box.Lower[1] = box.Any ? box.Lower[1] : static_cast<long>(j);
+    box.Upper[1] = static_cast<long>(j);
+    box.Any = true;
+  });
   Index<3> lower, upper;
   bool     any = false;
   for (SizeValueType k = 0; k < size[2]; ++k)
