@@ -22,6 +22,8 @@
 #include "itkImage.h"
 #include "itkTextureLayers.h"
 
+#include <vector>
+
 namespace itk {
 /** \class LayerStackTexture
  * \brief Textures made after sampling, from a layer stack (FlattenedTextureImageFilter's
@@ -54,6 +56,10 @@ namespace itk {
  *   Smooth(6 strokeSigma): letters' strokes are kept, the sheet's slow changes of
  *   brightness (a slab drifting towards a face, the sheet's edges) and pixel noise are not,
  *   so among focal slabs of a noisy scan the one that shows the writing scores highest.
+ * - Quantiles(): the values of the finite pixels at the given ranks q (0..1; the value
+ *   of rank round(q (n - 1)) of the n finite pixels sorted), exactly, by sampled selection
+ *   in a few passes without copying the texture (a display window, a noise level). An
+ *   empty list when no pixel is finite.
  * - NoiseSpread(): 1.4826 x the median absolute deviation of the finite pixels (the
  *   standard deviation for Gaussian noise): the spread of the sheet's background, which
  *   covers most of a texture; 0 when fewer than 2 pixels are finite.
@@ -103,6 +109,26 @@ public:
           double                 gaussianSigma,
           double                 coreWidth);
 
+  /** One texture of the several-at-once Combine(): the layers on Side, less the mean of
+   * their core when CoreWidth > 0. */
+  struct Combination
+  {
+    SideType Side;
+    double   CoreWidth;
+  };
+
+  /** Several combinations of the same stack in one pass over it (each pixel's samples read
+   * once): the same textures as one Combine() each. */
+  static std::vector<TextureType::Pointer>
+  Combine(const LayerStackType *           stack,
+          unsigned int                     numberOfLayers,
+          double                           layerSpacing,
+          double                           focus,
+          SideType                         stackSide,
+          FilterType                       filter,
+          double                           gaussianSigma,
+          const std::vector<Combination> & combinations);
+
   static TextureType::Pointer
   LayerWindow(const LayerStackType * stack, unsigned int first, unsigned int count);
 
@@ -114,6 +140,9 @@ public:
 
   static double
   NoiseSpread(const TextureType * texture);
+
+  static std::vector<double>
+  Quantiles(const TextureType * texture, const std::vector<double> & q);
 
   static TextureType::Pointer
   EdgePreservingSmooth(const TextureType * texture, double domainSigma, double rangeSigma);

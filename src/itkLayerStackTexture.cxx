@@ -20,6 +20,7 @@
 #include "itkGaussianImageSource.h"
 #include "itkMultiThreaderBase.h"
 #include "itkTikhonovDeconvolutionImageFilter.h"
+#include "vuFiniteRanks.h"
 #include "vuValidRegion.h"
 
 #include <algorithm>
@@ -64,41 +65,13 @@ NewTexture(const LayerStackType * stack)
   return texture;
 }
 
-// The finite pixels' values.
-std::vector<float>
-FiniteValues(const TextureType * texture)
-{
-  const float *      buffer = texture->GetBufferPointer();
-  std::vector<float> values;
-  values.reserve(texture->GetBufferedRegion().GetNumberOfPixels());
-  for (SizeValueType k = 0; k < texture->GetBufferedRegion().GetNumberOfPixels(); ++k)
-  {
-    if (std::isfinite(buffer[k]))
-    {
-      values.push_back(buffer[k]);
-    }
-  }
-  return values;
-}
-
-// The value of rank q (0..1) of `values`, which it reorders.
+// 1.4826 x the median absolute deviation from `median` of the finite pixels.
 double
-Rank(std::vector<float> & values, double q)
+Spread(const TextureType * texture, double median)
 {
-  const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * (values.size() - 1) + 0.5));
-  std::nth_element(values.begin(), values.begin() + k, values.end());
-  return values[k];
-}
-
-// 1.4826 x the median absolute deviation from `median` of `values` (reordered, changed).
-double
-Spread(std::vector<float> & values, double median)
-{
-  for (float & v : values)
-  {
-    v = std::abs(v - static_cast<float>(median));
-  }
-  return 1.4826 * Rank(values, 0.5);
+  const detail::FiniteRanks deviations(
+    texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels(), static_cast<float>(median));
+  return 1.4826 * deviations.Quantile(0.5);
 }
 
 // A copy of `texture` whose NaN pixels hold `fill`, and which pixels were NaN.
@@ -183,6 +156,20 @@ LayerStackTexture::Combine(const LayerStackType * stack,
                            double                 gaussianSigma,
                            double                 coreWidth)
 {
+  return Combine(stack, numberOfLayers, layerSpacing, focus, stackSide, filter, gaussianSigma, { { side, coreWidth } })
+    .front();
+}
+
+std::vector<LayerStackTexture::TextureType::Pointer>
+LayerStackTexture::Combine(const LayerStackType *           stack,
+                           unsigned int                     numberOfLayers,
+                           double                           layerSpacing,
+                           double                           focus,
+                           SideType                         stackSide,
+                           FilterType                       filter,
+                           double                           gaussianSigma,
+                           const std::vector<Combination> & combinations)
+{
   if (stack == nullptr)
   {
     itkGenericExceptionMacro(<< "LayerStackTexture::Combine: no layer stack");
@@ -193,99 +180,128 @@ LayerStackTexture::Combine(const LayerStackType * stack,
     itkGenericExceptionMacro(<< "LayerStackTexture::Combine: the stack has " << size[2] << " layers, not "
                              << numberOfLayers << ", or is not fully buffered");
   }
-  CheckParameter(coreWidth, true, "Combine", "the core width");
-  // The chosen layers: all of them, or one half of a stack sampled on both sides.
-  std::vector<SizeValueType> index;
-  unsigned int               count = numberOfLayers;
-  if (side == stackSide)
+  // Each combination's layers (all of them, or one half of a stack sampled on both sides),
+  // its TextureLayers and its core.
+  struct Plan
   {
-    for (unsigned int k = 0; k < numberOfLayers; ++k)
+    std::vector<SizeValueType> Index, Core;
+    TextureLayers              Layers;
+  };
+  std::vector<Plan> plans;
+  for (const Combination & c : combinations)
+  {
+    const SideType side = c.Side;
+    CheckParameter(c.CoreWidth, true, "Combine", "the core width");
+    std::vector<SizeValueType> index;
+    unsigned int               count = numberOfLayers;
+    if (side == stackSide)
     {
-      index.push_back(k);
-    }
-  }
-  else if (stackSide == SideType::Both && numberOfLayers % 2 == 1)
-  {
-    const unsigned int centre = (numberOfLayers - 1) / 2;
-    count = centre + 1;
-    for (unsigned int k = 0; k < count; ++k)
-    {
-      index.push_back(side == SideType::Positive ? centre + k : centre - k);
-    }
-  }
-  else
-  {
-    itkGenericExceptionMacro(<< "LayerStackTexture::Combine: cannot take the " << side << " layers of a stack of "
-                             << numberOfLayers << " layers sampled on side " << stackSide
-                             << " (a stack sampled on both sides with an odd number of layers splits in halves)");
-  }
-  const TextureLayers        layers(count, layerSpacing, focus, side, filter, gaussianSigma);
-  std::vector<SizeValueType> core;
-  if (coreWidth > 0.0)
-  {
-    for (unsigned int k = 0; k < count; ++k)
-    {
-      if (std::abs(layers.GetOffsets()[k] - focus) <= coreWidth + 1e-9 * layerSpacing)
+      for (unsigned int k = 0; k < numberOfLayers; ++k)
       {
-        core.push_back(k);
+        index.push_back(k);
       }
     }
-    if (core.empty())
+    else if (stackSide == SideType::Both && numberOfLayers % 2 == 1)
     {
-      itkGenericExceptionMacro(<< "LayerStackTexture::Combine: no layer lies within the core width " << coreWidth
-                               << " of the focus");
+      const unsigned int centre = (numberOfLayers - 1) / 2;
+      count = centre + 1;
+      for (unsigned int k = 0; k < count; ++k)
+      {
+        index.push_back(side == SideType::Positive ? centre + k : centre - k);
+      }
     }
+    else
+    {
+      itkGenericExceptionMacro(<< "LayerStackTexture::Combine: cannot take the " << side << " layers of a stack of "
+                               << numberOfLayers << " layers sampled on side " << stackSide
+                               << " (a stack sampled on both sides with an odd number of layers splits in halves)");
+    }
+    Plan plan{ index, {}, TextureLayers(count, layerSpacing, focus, side, filter, gaussianSigma) };
+    if (c.CoreWidth > 0.0)
+    {
+      for (unsigned int k = 0; k < count; ++k)
+      {
+        if (std::abs(plan.Layers.GetOffsets()[k] - focus) <= c.CoreWidth + 1e-9 * layerSpacing)
+        {
+          plan.Core.push_back(k);
+        }
+      }
+      if (plan.Core.empty())
+      {
+        itkGenericExceptionMacro(<< "LayerStackTexture::Combine: no layer lies within the core width " << c.CoreWidth
+                                 << " of the focus");
+      }
+    }
+    plans.push_back(std::move(plan));
   }
 
-  auto texture = NewTexture(stack);
-
+  std::vector<TextureType::Pointer> textures;
+  std::vector<float *>              out;
+  for (size_t c = 0; c < plans.size(); ++c)
+  {
+    textures.push_back(NewTexture(stack));
+    out.push_back(textures.back()->GetBufferPointer());
+  }
   const float *       in = stack->GetBufferPointer();
-  float *             out = texture->GetBufferPointer();
   const SizeValueType plane = size[0] * size[1];
-  // Row by row in parallel.
+  // Row by row in parallel, each pixel's samples read once for every combination.
   MultiThreaderBase::New()->ParallelizeArray(
     0,
     size[1],
     [&](SizeValueType row) {
-      std::vector<float> samples(count);
+      std::vector<float> all(numberOfLayers), samples(numberOfLayers);
+      std::vector<char>  finite(numberOfLayers);
       for (SizeValueType p = row * size[0]; p < (row + 1) * size[0]; ++p)
       {
-        bool finite = true;
-        for (unsigned int k = 0; k < count; ++k)
+        for (unsigned int k = 0; k < numberOfLayers; ++k)
         {
-          samples[k] = in[index[k] * plane + p];
-          finite = finite && std::isfinite(samples[k]);
+          all[k] = in[k * plane + p];
+          finite[k] = std::isfinite(all[k]);
         }
-        if (!finite)
+        for (size_t c = 0; c < plans.size(); ++c)
         {
-          out[p] = NaN;
-          continue;
+          const Plan & plan = plans[c];
+          bool         whole = true;
+          for (size_t k = 0; k < plan.Index.size(); ++k)
+          {
+            samples[k] = all[plan.Index[k]];
+            whole = whole && finite[plan.Index[k]];
+          }
+          if (!whole)
+          {
+            out[c][p] = NaN;
+            continue;
+          }
+          double coreMean = 0.0;
+          for (SizeValueType k : plan.Core)
+          {
+            coreMean += samples[k];
+          }
+          coreMean = plan.Core.empty() ? 0.0 : coreMean / plan.Core.size();
+          out[c][p] = static_cast<float>(plan.Layers.Combine(samples.data()) - coreMean);
         }
-        double coreMean = 0.0;
-        for (SizeValueType k : core)
-        {
-          coreMean += samples[k];
-        }
-        coreMean = core.empty() ? 0.0 : coreMean / core.size();
-        out[p] = static_cast<float>(layers.Combine(samples.data()) - coreMean);
       }
     },
     nullptr);
-  return texture;
+  return textures;
 }
 
 double
 LayerStackTexture::InkContrast(const TextureType * texture)
 {
   CheckTexture(texture, "InkContrast");
-  std::vector<float> values = FiniteValues(texture);
-  if (values.size() < 2)
+  const detail::FiniteRanks ranks(texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels());
+  const size_t              n = ranks.GetCount();
+  if (n < 2)
   {
     return 0.0;
   }
-  const double top = Rank(values, 0.99);
-  const double median = Rank(values, 0.5);
-  const double spread = Spread(values, median);
+  const auto rank = [n](double q) {
+    return std::min(n - 1, static_cast<size_t>(q * static_cast<double>(n - 1) + 0.5));
+  };
+  const auto   values = ranks.Values({ rank(0.99), rank(0.5) });
+  const double top = values[0], median = values[1];
+  const double spread = Spread(texture, median);
   return spread > 0.0 ? (top - median) / spread : 0.0;
 }
 
@@ -355,12 +371,35 @@ double
 LayerStackTexture::NoiseSpread(const TextureType * texture)
 {
   CheckTexture(texture, "NoiseSpread");
-  std::vector<float> values = FiniteValues(texture);
-  if (values.size() < 2)
+  const detail::FiniteRanks ranks(texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels());
+  if (ranks.GetCount() < 2)
   {
     return 0.0;
   }
-  return Spread(values, Rank(values, 0.5));
+  return Spread(texture, ranks.Quantile(0.5));
+}
+
+std::vector<double>
+LayerStackTexture::Quantiles(const TextureType * texture, const std::vector<double> & q)
+{
+  CheckTexture(texture, "Quantiles");
+  const detail::FiniteRanks ranks(texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels());
+  const size_t              n = ranks.GetCount();
+  if (n == 0)
+  {
+    return {};
+  }
+  std::vector<size_t> asked;
+  for (const double p : q)
+  {
+    if (!(p >= 0.0 && p <= 1.0))
+    {
+      itkGenericExceptionMacro(<< "LayerStackTexture::Quantiles: a rank must lie in 0..1, got " << p);
+    }
+    asked.push_back(static_cast<size_t>(p * static_cast<double>(n - 1) + 0.5));
+  }
+  const std::vector<float> values = ranks.Values(asked);
+  return { values.begin(), values.end() };
 }
 
 LayerStackTexture::TextureType::Pointer
@@ -379,56 +418,78 @@ LayerStackTexture::Smooth(const TextureType * texture, double sigma)
     return result;
   }
   // Normalised convolution: the weighted sum of the finite values over the sum of their
-  // weights, separably along x then y.
-  std::vector<double> value(n), weight(n);
-  for (size_t k = 0; k < n; ++k)
-  {
-    const bool ok = std::isfinite(in[k]);
-    value[k] = ok ? in[k] : 0.0;
-    weight[k] = ok ? 1.0 : 0.0;
-  }
-  for (unsigned int d = 0; d < 2; ++d)
-  {
-    const double        s = sigma / texture->GetSpacing()[d];
-    const long          radius = std::max(1L, static_cast<long>(std::ceil(3.0 * s)));
-    std::vector<double> kernel(2 * radius + 1);
+  // weights, separably: along x row by row, then along y, each output row a weighted sum of
+  // whole rows (both passes by rows in parallel, in single precision).
+  const auto columns = static_cast<long>(size[0]), rows = static_cast<long>(size[1]);
+  const auto kernel = [&](unsigned int d) {
+    const double       s = sigma / texture->GetSpacing()[d];
+    const long         radius = std::max(1L, static_cast<long>(std::ceil(3.0 * s)));
+    std::vector<float> k(2 * radius + 1);
     for (long r = -radius; r <= radius; ++r)
     {
-      kernel[r + radius] = std::exp(-0.5 * r * r / (s * s));
+      k[r + radius] = static_cast<float>(std::exp(-0.5 * r * r / (s * s)));
     }
-    const long   length = static_cast<long>(size[d]);
-    const size_t stride = d == 0 ? 1 : size[0];
-    const size_t lines = d == 0 ? size[1] : size[0];
-    // Lines in parallel, each on its own copy of its values.
-    MultiThreaderBase::New()->ParallelizeArray(
-      0,
-      lines,
-      [&](SizeValueType line) {
-        std::vector<double> v(length), w(length);
-        const size_t        first = d == 0 ? line * size[0] : line;
-        for (long i = 0; i < length; ++i)
+    return k;
+  };
+  const std::vector<float> kx = kernel(0), ky = kernel(1);
+  const long               rx = static_cast<long>(kx.size() / 2), ry = static_cast<long>(ky.size() / 2);
+  std::vector<float>       value(n), weight(n);
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[1],
+    [&](SizeValueType row) {
+      // The row's values and weights padded with rx zeros each side; each tap added to the
+      // whole row at once.
+      std::vector<float> v(columns + 2 * rx, 0.0f), w(columns + 2 * rx, 0.0f);
+      const float *      line = in + row * columns;
+      for (long x = 0; x < columns; ++x)
+      {
+        const bool ok = std::isfinite(line[x]);
+        v[x + rx] = ok ? line[x] : 0.0f;
+        w[x + rx] = ok ? 1.0f : 0.0f;
+      }
+      float * sv = &value[row * columns];
+      float * sw = &weight[row * columns];
+      std::fill(sv, sv + columns, 0.0f);
+      std::fill(sw, sw + columns, 0.0f);
+      for (long r = 0; r <= 2 * rx; ++r)
+      {
+        const float   k = kx[r];
+        const float * vr = &v[r];
+        const float * wr = &w[r];
+        for (long x = 0; x < columns; ++x)
         {
-          v[i] = value[first + i * stride];
-          w[i] = weight[first + i * stride];
+          sv[x] += k * vr[x];
+          sw[x] += k * wr[x];
         }
-        for (long i = 0; i < length; ++i)
+      }
+    },
+    nullptr);
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[1],
+    [&](SizeValueType row) {
+      const auto         y = static_cast<long>(row);
+      std::vector<float> sv(columns, 0.0f), sw(columns, 0.0f);
+      for (long r = std::max(-ry, -y); r <= std::min(ry, rows - 1 - y); ++r)
+      {
+        const float   k = ky[r + ry];
+        const float * v = &value[(y + r) * columns];
+        const float * w = &weight[(y + r) * columns];
+        for (long x = 0; x < columns; ++x)
         {
-          double sv = 0.0, sw = 0.0;
-          for (long r = std::max(-radius, -i); r <= std::min(radius, length - 1 - i); ++r)
-          {
-            sv += kernel[r + radius] * v[i + r];
-            sw += kernel[r + radius] * w[i + r];
-          }
-          value[first + i * stride] = sv;
-          weight[first + i * stride] = sw;
+          sv[x] += k * v[x];
+          sw[x] += k * w[x];
         }
-      },
-      nullptr);
-  }
-  for (size_t k = 0; k < n; ++k)
-  {
-    out[k] = std::isfinite(in[k]) && weight[k] > 0.0 ? static_cast<float>(value[k] / weight[k]) : NaN;
-  }
+      }
+      const float * line = in + y * columns;
+      float *       target = out + y * columns;
+      for (long x = 0; x < columns; ++x)
+      {
+        target[x] = std::isfinite(line[x]) && sw[x] > 0.0f ? sv[x] / sw[x] : NaN;
+      }
+    },
+    nullptr);
   return result;
 }
 
@@ -552,8 +613,8 @@ LayerStackTexture::EdgePreservingSmooth(const TextureType * texture, double doma
   CheckTexture(texture, "EdgePreservingSmooth");
   CheckParameter(domainSigma, true, "EdgePreservingSmooth", "the domain sigma");
   CheckParameter(rangeSigma, false, "EdgePreservingSmooth", "the range sigma");
-  std::vector<float> values = FiniteValues(texture);
-  if (domainSigma == 0.0 || values.empty())
+  const detail::FiniteRanks ranks(texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels());
+  if (domainSigma == 0.0 || ranks.GetCount() == 0)
   {
     return Smooth(texture, 0.0);
   }
@@ -561,7 +622,7 @@ LayerStackTexture::EdgePreservingSmooth(const TextureType * texture, double doma
   // (its fixed RangeMu): NaN pixels are filled with a value 10 range sigmas above every
   // finite one, so they neither contribute nor take anything from their neighbours.
   auto         bilateral = BilateralImageFilter<TextureType, TextureType>::New();
-  const double top = *std::max_element(values.begin(), values.end());
+  const double top = ranks.Value(ranks.GetCount() - 1);
   bilateral->SetDomainSigma(domainSigma);
   bilateral->SetRangeSigma(rangeSigma);
   return RunFilled(bilateral.GetPointer(), texture, static_cast<float>(top + 10.0 * rangeSigma + 1.0));
@@ -573,8 +634,8 @@ LayerStackTexture::Deconvolve(const TextureType * texture, double psfSigma, doub
   CheckTexture(texture, "Deconvolve");
   CheckParameter(psfSigma, true, "Deconvolve", "the PSF sigma");
   CheckParameter(regularization, false, "Deconvolve", "the regularization");
-  std::vector<float> values = FiniteValues(texture);
-  if (psfSigma == 0.0 || values.empty())
+  const detail::FiniteRanks ranks(texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels());
+  if (psfSigma == 0.0 || ranks.GetCount() == 0)
   {
     return Smooth(texture, 0.0);
   }
@@ -601,7 +662,7 @@ LayerStackTexture::Deconvolve(const TextureType * texture, double psfSigma, doub
   deconvolve->SetRegularizationConstant(regularization);
   // The transform needs every pixel: those off the sheet hold the sheet's median, which
   // adds no edge at the sheet's outline.
-  auto result = RunFilled(deconvolve.GetPointer(), texture, static_cast<float>(Rank(values, 0.5)));
+  auto result = RunFilled(deconvolve.GetPointer(), texture, ranks.Quantile(0.5));
   // Tikhonov's filter has gain 1 / (1 + regularization) at zero frequency: undone, so
   // flat regions keep their value (NaN stays NaN).
   float * out = result->GetBufferPointer();

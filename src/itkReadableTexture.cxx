@@ -128,6 +128,7 @@ SelectReadableTexture(const Image<float, 3> * stack, const ReadableTextureSettin
     : settings.AutomaticSide ? std::vector<SideEnum>{ SideEnum::Both, SideEnum::Positive, SideEnum::Negative }
                              : std::vector<SideEnum>{ settings.StackSide };
   using Core = TextureLayersEnums::CoreSubtraction;
+  std::vector<LayerStackTexture::Combination> combinations;
   for (const SideEnum side : sides)
   {
     const std::vector<bool> cores = settings.SubtractCore == Core::Yes ? std::vector<bool>{ true }
@@ -136,18 +137,21 @@ SelectReadableTexture(const Image<float, 3> * stack, const ReadableTextureSettin
                                       : std::vector<bool>{ false, true };
     for (const bool core : cores)
     {
-      const auto combined = LayerStackTexture::Combine(stack,
-                                                       layers,
-                                                       settings.LayerSpacing,
-                                                       settings.Focus,
-                                                       settings.StackSide,
-                                                       side,
-                                                       settings.Filter,
-                                                       settings.GaussianSigma,
-                                                       core ? selection.CoreWidth : 0.0);
-      textures.push_back(denoise(combined));
+      combinations.push_back({ side, core ? selection.CoreWidth : 0.0 });
       selection.Candidates.push_back({ side, core, 0.0, 0, 0 });
     }
+  }
+  // The sides' textures in one pass over the stack, then each denoised.
+  for (const auto & combined : LayerStackTexture::Combine(stack,
+                                                          layers,
+                                                          settings.LayerSpacing,
+                                                          settings.Focus,
+                                                          settings.StackSide,
+                                                          settings.Filter,
+                                                          settings.GaussianSigma,
+                                                          combinations))
+  {
+    textures.push_back(denoise(combined));
   }
   // The sides' scores, all at once in parallel (each a few selections over the texture).
   const size_t scored = selection.FocalSlabs ? selection.Candidates.size() : 0;

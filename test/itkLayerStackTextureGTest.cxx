@@ -22,8 +22,10 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 namespace {
@@ -525,4 +527,113 @@ TEST(LayerStackTexture, MedianEqualsTheMedianOfEachWindow)
       }
     }
   }
+}
+
+TEST(LayerStackTexture, SmoothEqualsTheNormalisedConvolutionOfEachPixel)
+{
+  // Random values with holes, anisotropic pixels: every pixel equals the Gaussian-weighted
+  // mean of the finite values about it (weights separable, three sigmas each way).
+  std::mt19937                          random(std::random_device{}());
+  std::uniform_real_distribution<float> value(-50.0f, 200.0f);
+  const auto                            texture = MakeTexture(29, 31, 0.5, [&](unsigned x, unsigned y) {
+    const float v = value(random);
+    return (x * 7 + y * 5) % 11 == 0 || x + y < 4 ? NaN : v;
+  });
+  const double                          sigma = 0.8;
+  const auto                            result = LST::Smooth(texture, sigma);
+  const long                            radius = static_cast<long>(std::ceil(3.0 * sigma / 0.5));
+  for (long y = 0; y < 31; ++y)
+  {
+    for (long x = 0; x < 29; ++x)
+    {
+      if (!std::isfinite(At(texture, x, y)))
+      {
+        EXPECT_FALSE(std::isfinite(At(result, x, y)));
+        continue;
+      }
+      double sv = 0.0, sw = 0.0;
+      for (long v = std::max(0L, y - radius); v <= std::min(30L, y + radius); ++v)
+      {
+        for (long u = std::max(0L, x - radius); u <= std::min(28L, x + radius); ++u)
+        {
+          const double w = std::exp(-0.5 * ((u - x) * (u - x) + (v - y) * (v - y)) * 0.25 / (sigma * sigma));
+          if (std::isfinite(At(texture, u, v)))
+          {
+            sv += w * At(texture, u, v);
+            sw += w;
+          }
+        }
+      }
+      ASSERT_NEAR(At(result, x, y), sv / sw, 1e-3) << "at " << x << ", " << y;
+    }
+  }
+}
+
+TEST(LayerStackTexture, RankMeasuresAreThoseOfTheSortedFiniteValues)
+{
+  // Random textures (seed drawn each run) of wide and narrow ranges, repeated values, signed
+  // zeros, NaN and infinities: the ink contrast and the noise spread are those computed from
+  // the sorted finite values.
+  const unsigned int seed = std::random_device{}();
+  std::mt19937       random(seed);
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  constexpr float                         Inf = std::numeric_limits<float>::infinity();
+  std::uniform_int_distribution<unsigned> extent(1, 150);
+  std::uniform_real_distribution<float>   scale(-30.0f, 30.0f), unit(0.0f, 1.0f);
+  for (int trial = 0; trial < 22; ++trial)
+  {
+    // The last two: a regular sample of the pixels sees only the first column, which holds
+    // the smallest values (or the largest).
+    const bool  striped = trial >= 20;
+    const float range = std::pow(2.0f, scale(random));
+    const auto  texture =
+      MakeTexture(striped ? 3 : extent(random), striped ? 8192 : extent(random), 0.5, [&](unsigned x, unsigned y) {
+        if (striped)
+        {
+          return (x == 0 ? -1.0f : 1.0f) * (trial == 20 ? 1.0f : -1.0f) * (1000.0f - 0.01f * y) + unit(random);
+        }
+        const float u = unit(random);
+        return u < 0.05f   ? NaN
+               : u < 0.06f ? Inf
+               : u < 0.07f ? -Inf
+               : u < 0.08f ? 0.0f
+               : u < 0.09f ? -0.0f
+               : u < 0.3f  ? std::round(range * (2.0f * unit(random) - 1.0f))
+                           : range * (2.0f * unit(random) - 1.0f);
+      });
+    std::vector<float> sorted;
+    const size_t       n = texture->GetBufferedRegion().GetNumberOfPixels();
+    std::copy_if(texture->GetBufferPointer(), texture->GetBufferPointer() + n, std::back_inserter(sorted), [](float v) {
+      return std::isfinite(v);
+    });
+    if (sorted.size() < 2)
+    {
+      EXPECT_EQ(LST::InkContrast(texture), 0.0);
+      EXPECT_EQ(LST::Quantiles(texture, { 0.5 }).size(), sorted.size());
+      continue;
+    }
+    std::sort(sorted.begin(), sorted.end());
+    const auto rank = [&](const std::vector<float> & values, double q) {
+      return static_cast<double>(values[static_cast<size_t>(q * (values.size() - 1) + 0.5)]);
+    };
+    const double       median = rank(sorted, 0.5), top = rank(sorted, 0.99);
+    std::vector<float> deviations;
+    for (const float v : sorted)
+    {
+      deviations.push_back(std::abs(v - static_cast<float>(median)));
+    }
+    std::sort(deviations.begin(), deviations.end());
+    const double spread = 1.4826 * rank(deviations, 0.5);
+    EXPECT_EQ(LST::NoiseSpread(texture), spread) << "trial " << trial;
+    const std::vector<double> q{ 0.0, 0.005, 0.5, 0.99, 0.995, 1.0 };
+    const std::vector<double> quantiles = LST::Quantiles(texture, q);
+    ASSERT_EQ(quantiles.size(), q.size());
+    for (size_t k = 0; k < q.size(); ++k)
+    {
+      EXPECT_EQ(quantiles[k], rank(sorted, q[k])) << "trial " << trial << ", q " << q[k];
+    }
+    EXPECT_EQ(LST::InkContrast(texture), spread > 0.0 ? (top - median) / spread : 0.0) << "trial " << trial;
+  }
+  EXPECT_THROW(LST::Quantiles(MakeTexture(2, 2, 0.5, [](unsigned, unsigned) { return 1.0f; }), { 1.5 }),
+               itk::ExceptionObject);
 }

@@ -576,7 +576,8 @@ VertexTexture(MeshType * surfaceMesh, const VolumeType * volume, const TexturerT
   return values;
 }
 
-// What the tool writes besides the report, as written (rows top-down).
+// What the tool writes besides the report, as written (rows top-down), but for the layer
+// stack, which is flipped to that order as its file is written, on the writer's thread.
 struct Results
 {
   itk::SheetMesh           Surface, Flat;
@@ -609,7 +610,7 @@ WriteResults(const Results & results, const TexturerType & texturer, OutputStagi
   // is written, given two threads or more.
   auto writeTiffs = [&]() {
     WriteImageFile(results.Texture.GetPointer(), staging / "texture.tif");
-    WriteImageFile(results.Layers.GetPointer(), staging / "layers.tif");
+    WriteImageFile(FlipRows(results.Layers.GetPointer()).GetPointer(), staging / "layers.tif");
   };
   std::future<void> tiffs;
   if (itk::MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
@@ -731,7 +732,7 @@ RunUnwrap(UnwrapOptions & options)
   results.VertexTexture = VertexTexture(surfaceFilter->GetOutput(), scan.Volume, *texturer);
   results.Texture = FlipRows(texturer->GetOutput());
   results.Mask = FlipRows(texturer->GetMaskOutput());
-  results.Layers = FlipRows(texturer->GetLayerStackOutput());
+  results.Layers = texturer->GetLayerStackOutput();
   // The image to look at and to read: the texture less a border of the sheet, where the
   // mid-surface meets the sheet's ends and edges and the samples mix in air.
   const double displayBorder = AutoOrLength(options.DisplayBorder, "--display-border", meshReport.SheetThickness);

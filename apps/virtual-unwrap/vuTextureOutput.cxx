@@ -21,6 +21,7 @@
 
 #include "itkImageRegionConstIterator.h"
 #include "itkImageRegionIterator.h"
+#include "itkLayerStackTexture.h"
 
 #include <algorithm>
 #include <cmath>
@@ -47,25 +48,13 @@ itk::Image<unsigned char, 2>::Pointer
 EightBit(const itk::Image<float, 2> * texture)
 {
   using TextureType = itk::Image<float, 2>;
-  std::vector<float> values;
-  for (itk::ImageRegionConstIterator<TextureType> it(texture, texture->GetBufferedRegion()); !it.IsAtEnd(); ++it)
-  {
-    if (std::isfinite(it.Get()))
-    {
-      values.push_back(it.Get());
-    }
-  }
-  if (values.empty())
+  const std::vector<double> window = itk::LayerStackTexture::Quantiles(texture, { 0.005, 0.995 });
+  if (window.empty())
   {
     throw UsageError("the texture has no pixel on the sheet");
   }
-  auto percentile = [&values](double q) {
-    const size_t k = std::min(values.size() - 1, static_cast<size_t>(q * values.size()));
-    std::nth_element(values.begin(), values.begin() + k, values.end());
-    return values[k];
-  };
-  const float lo = percentile(0.005), hi = std::max(percentile(0.995), lo + 1e-6f);
-  auto        out = itk::Image<unsigned char, 2>::New();
+  const auto lo = static_cast<float>(window[0]), hi = std::max(static_cast<float>(window[1]), lo + 1e-6f);
+  auto       out = itk::Image<unsigned char, 2>::New();
   out->CopyInformation(texture);
   out->SetRegions(texture->GetBufferedRegion());
   out->Allocate();

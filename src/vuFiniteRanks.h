@@ -1,0 +1,81 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef vuFiniteRanks_h
+#define vuFiniteRanks_h
+
+#include <cstddef>
+#include <vector>
+
+namespace itk {
+namespace detail {
+/** Exact order statistics of the finite values of a float array (NaN and infinities are
+ * left out), optionally of their absolute deviations |v - centre|, by sampled selection
+ * (Floyd and Rivest, "Expected time bounds for selection", CACM 18(3), 1975): a regular
+ * sample of about 8192 values, sorted, brackets each rank asked for between two of its
+ * values; one pass over the data counts the values below each bracket and keeps those
+ * inside it, and the rank is selected among those few. Where the bracket misses (the
+ * sample misled), the rank is selected among all values. Exactly the values
+ * std::nth_element over a copy gives, in two light passes of the data, whatever its
+ * order. The data must outlive the object. */
+class FiniteRanks
+{
+public:
+  FiniteRanks(const float * values, size_t count);
+  FiniteRanks(const float * values, size_t count, float centre);
+
+  /** The number of finite values. */
+  size_t
+  GetCount() const
+  {
+    return m_Finite;
+  }
+
+  /** The values of ranks `ranks` (0-based, each below GetCount()), in one pass. */
+  std::vector<float>
+  Values(const std::vector<size_t> & ranks) const;
+
+  /** The value of rank round(q (count - 1)) (q in 0..1), as a quantile. */
+  float
+  Quantile(double q) const;
+
+  /** The value of rank k, one rank. */
+  float
+  Value(size_t k) const
+  {
+    return Values({ k })[0];
+  }
+
+private:
+  void
+  Count();
+  template <typename TVisit>
+  void
+  ForEachFinite(TVisit && visit) const;
+
+  const float *      m_Values;
+  size_t             m_Size;
+  bool               m_Deviation{ false };
+  float              m_Centre{ 0.0f };
+  size_t             m_Finite{ 0 };
+  std::vector<float> m_Sample;
+};
+
+} // namespace detail
+} // end namespace itk
+
+#endif
