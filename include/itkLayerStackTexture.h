@@ -109,26 +109,6 @@ public:
           double                 gaussianSigma,
           double                 coreWidth);
 
-  /** One texture of the several-at-once Combine(): the layers on Side, less the mean of
-   * their core when CoreWidth > 0. */
-  struct Combination
-  {
-    SideType Side;
-    double   CoreWidth;
-  };
-
-  /** Several combinations of the same stack in one pass over it (each pixel's samples read
-   * once): the same textures as one Combine() each. */
-  static std::vector<TextureType::Pointer>
-  Combine(const LayerStackType *           stack,
-          unsigned int                     numberOfLayers,
-          double                           layerSpacing,
-          double                           focus,
-          SideType                         stackSide,
-          FilterType                       filter,
-          double                           gaussianSigma,
-          const std::vector<Combination> & combinations);
-
   static TextureType::Pointer
   LayerWindow(const LayerStackType * stack, unsigned int first, unsigned int count);
 

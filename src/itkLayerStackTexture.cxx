@@ -20,6 +20,7 @@
 #include "itkGaussianImageSource.h"
 #include "itkMultiThreaderBase.h"
 #include "itkTikhonovDeconvolutionImageFilter.h"
+#include "vuCombineLayers.h"
 #include "vuFiniteRanks.h"
 #include "vuValidRegion.h"
 
@@ -156,19 +157,20 @@ LayerStackTexture::Combine(const LayerStackType * stack,
                            double                 gaussianSigma,
                            double                 coreWidth)
 {
-  return Combine(stack, numberOfLayers, layerSpacing, focus, stackSide, filter, gaussianSigma, { { side, coreWidth } })
+  return detail::CombineLayers(
+           stack, numberOfLayers, layerSpacing, focus, stackSide, filter, gaussianSigma, { { side, coreWidth } })
     .front();
 }
 
 std::vector<LayerStackTexture::TextureType::Pointer>
-LayerStackTexture::Combine(const LayerStackType *           stack,
-                           unsigned int                     numberOfLayers,
-                           double                           layerSpacing,
-                           double                           focus,
-                           SideType                         stackSide,
-                           FilterType                       filter,
-                           double                           gaussianSigma,
-                           const std::vector<Combination> & combinations)
+detail::CombineLayers(const LayerStackType *                stack,
+                      unsigned int                          numberOfLayers,
+                      double                                layerSpacing,
+                      double                                focus,
+                      TextureLayersEnums::Side              stackSide,
+                      TextureLayersEnums::Filter            filter,
+                      double                                gaussianSigma,
+                      const std::vector<LayerCombination> & combinations)
 {
   if (stack == nullptr)
   {
@@ -188,9 +190,9 @@ LayerStackTexture::Combine(const LayerStackType *           stack,
     TextureLayers              Layers;
   };
   std::vector<Plan> plans;
-  for (const Combination & c : combinations)
+  for (const detail::LayerCombination & c : combinations)
   {
-    const SideType side = c.Side;
+    const auto side = c.Side;
     CheckParameter(c.CoreWidth, true, "Combine", "the core width");
     std::vector<SizeValueType> index;
     unsigned int               count = numberOfLayers;
@@ -201,13 +203,13 @@ LayerStackTexture::Combine(const LayerStackType *           stack,
         index.push_back(k);
       }
     }
-    else if (stackSide == SideType::Both && numberOfLayers % 2 == 1)
+    else if (stackSide == TextureLayersEnums::Side::Both && numberOfLayers % 2 == 1)
     {
       const unsigned int centre = (numberOfLayers - 1) / 2;
       count = centre + 1;
       for (unsigned int k = 0; k < count; ++k)
       {
-        index.push_back(side == SideType::Positive ? centre + k : centre - k);
+        index.push_back(side == TextureLayersEnums::Side::Positive ? centre + k : centre - k);
       }
     }
     else

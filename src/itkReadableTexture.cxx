@@ -19,6 +19,7 @@
 #include "itkLayerStackTexture.h"
 #include "itkMacro.h"
 #include "itkMultiThreaderBase.h"
+#include "vuCombineLayers.h"
 
 #include <algorithm>
 #include <cmath>
@@ -128,7 +129,7 @@ SelectReadableTexture(const Image<float, 3> * stack, const ReadableTextureSettin
     : settings.AutomaticSide ? std::vector<SideEnum>{ SideEnum::Both, SideEnum::Positive, SideEnum::Negative }
                              : std::vector<SideEnum>{ settings.StackSide };
   using Core = TextureLayersEnums::CoreSubtraction;
-  std::vector<LayerStackTexture::Combination> combinations;
+  std::vector<detail::LayerCombination> combinations;
   for (const SideEnum side : sides)
   {
     const std::vector<bool> cores = settings.SubtractCore == Core::Yes ? std::vector<bool>{ true }
@@ -142,14 +143,14 @@ SelectReadableTexture(const Image<float, 3> * stack, const ReadableTextureSettin
     }
   }
   // The sides' textures in one pass over the stack, then each denoised.
-  for (const auto & combined : LayerStackTexture::Combine(stack,
-                                                          layers,
-                                                          settings.LayerSpacing,
-                                                          settings.Focus,
-                                                          settings.StackSide,
-                                                          settings.Filter,
-                                                          settings.GaussianSigma,
-                                                          combinations))
+  for (const auto & combined : detail::CombineLayers(stack,
+                                                     layers,
+                                                     settings.LayerSpacing,
+                                                     settings.Focus,
+                                                     settings.StackSide,
+                                                     settings.Filter,
+                                                     settings.GaussianSigma,
+                                                     combinations))
   {
     textures.push_back(denoise(combined));
   }
