@@ -66,13 +66,18 @@ NewTexture(const LayerStackType * stack)
   return texture;
 }
 
-// 1.4826 x the median absolute deviation from `median` of the finite pixels.
-double
-Spread(const TextureType * texture, double median)
+// The ranks of a texture's finite pixels.
+detail::FiniteRanks
+TextureRanks(const TextureType * texture)
 {
-  const detail::FiniteRanks deviations(
-    texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels(), static_cast<float>(median));
-  return 1.4826 * deviations.Quantile(0.5);
+  return detail::FiniteRanks(texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels());
+}
+
+// 1.4826 x the median absolute deviation of the ranked values from their `median`.
+double
+Spread(const detail::FiniteRanks & ranks, double median)
+{
+  return 1.4826 * ranks.Deviations(static_cast<float>(median)).Quantile(0.5);
 }
 
 // A copy of `texture` whose NaN pixels hold `fill`, and which pixels were NaN.
@@ -292,18 +297,14 @@ double
 LayerStackTexture::InkContrast(const TextureType * texture)
 {
   CheckTexture(texture, "InkContrast");
-  const detail::FiniteRanks ranks(texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels());
-  const size_t              n = ranks.GetCount();
-  if (n < 2)
+  const detail::FiniteRanks ranks = TextureRanks(texture);
+  if (ranks.GetCount() < 2)
   {
     return 0.0;
   }
-  const auto rank = [n](double q) {
-    return std::min(n - 1, static_cast<size_t>(q * static_cast<double>(n - 1) + 0.5));
-  };
-  const auto   values = ranks.Values({ rank(0.99), rank(0.5) });
+  const auto   values = ranks.Quantiles({ 0.99, 0.5 });
   const double top = values[0], median = values[1];
-  const double spread = Spread(texture, median);
+  const double spread = Spread(ranks, median);
   return spread > 0.0 ? (top - median) / spread : 0.0;
 }
 
@@ -373,34 +374,31 @@ double
 LayerStackTexture::NoiseSpread(const TextureType * texture)
 {
   CheckTexture(texture, "NoiseSpread");
-  const detail::FiniteRanks ranks(texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels());
+  const detail::FiniteRanks ranks = TextureRanks(texture);
   if (ranks.GetCount() < 2)
   {
     return 0.0;
   }
-  return Spread(texture, ranks.Quantile(0.5));
+  return Spread(ranks, ranks.Quantile(0.5));
 }
 
 std::vector<double>
 LayerStackTexture::Quantiles(const TextureType * texture, const std::vector<double> & q)
 {
   CheckTexture(texture, "Quantiles");
-  const detail::FiniteRanks ranks(texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels());
-  const size_t              n = ranks.GetCount();
-  if (n == 0)
-  {
-    return {};
-  }
-  std::vector<size_t> asked;
   for (const double p : q)
   {
     if (!(p >= 0.0 && p <= 1.0))
     {
       itkGenericExceptionMacro(<< "LayerStackTexture::Quantiles: a rank must lie in 0..1, got " << p);
     }
-    asked.push_back(static_cast<size_t>(p * static_cast<double>(n - 1) + 0.5));
   }
-  const std::vector<float> values = ranks.Values(asked);
+  const detail::FiniteRanks ranks = TextureRanks(texture);
+  if (ranks.GetCount() == 0)
+  {
+    return {};
+  }
+  const std::vector<float> values = ranks.Quantiles(q);
   return { values.begin(), values.end() };
 }
 
@@ -450,10 +448,8 @@ LayerStackTexture::Smooth(const TextureType * texture, double sigma)
         v[x + rx] = ok ? line[x] : 0.0f;
         w[x + rx] = ok ? 1.0f : 0.0f;
       }
-      float * sv = &value[row * columns];
+      float * sv = &value[row * columns]; // zero, as allocated
       float * sw = &weight[row * columns];
-      std::fill(sv, sv + columns, 0.0f);
-      std::fill(sw, sw + columns, 0.0f);
       for (long r = 0; r <= 2 * rx; ++r)
       {
         const float   k = kx[r];
@@ -615,16 +611,21 @@ LayerStackTexture::EdgePreservingSmooth(const TextureType * texture, double doma
   CheckTexture(texture, "EdgePreservingSmooth");
   CheckParameter(domainSigma, true, "EdgePreservingSmooth", "the domain sigma");
   CheckParameter(rangeSigma, false, "EdgePreservingSmooth", "the range sigma");
-  const detail::FiniteRanks ranks(texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels());
-  if (domainSigma == 0.0 || ranks.GetCount() == 0)
+  const float * begin = texture->GetBufferPointer();
+  const float * end = begin + texture->GetBufferedRegion().GetNumberOfPixels();
+  float         top = -std::numeric_limits<float>::infinity();
+  for (const float * v = begin; v != end; ++v)
+  {
+    top = std::isfinite(*v) ? std::max(top, *v) : top;
+  }
+  if (domainSigma == 0.0 || !std::isfinite(top))
   {
     return Smooth(texture, 0.0);
   }
   // ITK's bilateral filter gives no weight to neighbours more than 4 range sigmas away
   // (its fixed RangeMu): NaN pixels are filled with a value 10 range sigmas above every
   // finite one, so they neither contribute nor take anything from their neighbours.
-  auto         bilateral = BilateralImageFilter<TextureType, TextureType>::New();
-  const double top = ranks.Value(ranks.GetCount() - 1);
+  auto bilateral = BilateralImageFilter<TextureType, TextureType>::New();
   bilateral->SetDomainSigma(domainSigma);
   bilateral->SetRangeSigma(rangeSigma);
   return RunFilled(bilateral.GetPointer(), texture, static_cast<float>(top + 10.0 * rangeSigma + 1.0));
@@ -636,7 +637,7 @@ LayerStackTexture::Deconvolve(const TextureType * texture, double psfSigma, doub
   CheckTexture(texture, "Deconvolve");
   CheckParameter(psfSigma, true, "Deconvolve", "the PSF sigma");
   CheckParameter(regularization, false, "Deconvolve", "the regularization");
-  const detail::FiniteRanks ranks(texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels());
+  const detail::FiniteRanks ranks = TextureRanks(texture);
   if (psfSigma == 0.0 || ranks.GetCount() == 0)
   {
     return Smooth(texture, 0.0);

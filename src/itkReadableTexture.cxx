@@ -154,7 +154,7 @@ SelectReadableTexture(const Image<float, 3> * stack, const ReadableTextureSettin
   {
     textures.push_back(denoise(combined));
   }
-  // The sides' scores, all at once in parallel (each a few selections over the texture).
+  // The sides' scores, all at once in parallel (each a few passes over its texture).
   const size_t scored = selection.FocalSlabs ? selection.Candidates.size() : 0;
   MultiThreaderBase::New()->ParallelizeArray(
     scored,

@@ -18,7 +18,8 @@
 #ifndef vuCombineLayers_h
 #define vuCombineLayers_h
 
-#include "itkLayerStackTexture.h"
+#include "itkImage.h"
+#include "itkTextureLayers.h"
 
 #include <vector>
 
@@ -34,15 +35,15 @@ struct LayerCombination
 
 /** Several combinations of the same stack in one pass over it (each pixel's samples read
  * once): the same textures as one LayerStackTexture::Combine() each. */
-std::vector<LayerStackTexture::TextureType::Pointer>
-CombineLayers(const LayerStackTexture::LayerStackType * stack,
-              unsigned int                              numberOfLayers,
-              double                                    layerSpacing,
-              double                                    focus,
-              TextureLayersEnums::Side                  stackSide,
-              TextureLayersEnums::Filter                filter,
-              double                                    gaussianSigma,
-              const std::vector<LayerCombination> &     combinations);
+std::vector<Image<float, 2>::Pointer>
+CombineLayers(const Image<float, 3> *               stack,
+              unsigned int                          numberOfLayers,
+              double                                layerSpacing,
+              double                                focus,
+              TextureLayersEnums::Side              stackSide,
+              TextureLayersEnums::Filter            filter,
+              double                                gaussianSigma,
+              const std::vector<LayerCombination> & combinations);
 } // namespace detail
 } // end namespace itk
 

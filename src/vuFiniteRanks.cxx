@@ -29,113 +29,112 @@ namespace {
 // WindowSpread standard deviations of the rank's expected place in the sample.
 constexpr size_t SampleSize = 8192;
 constexpr double WindowSpread = 4.0;
+
+bool
+Finite(float v)
+{
+  return std::abs(v) <= std::numeric_limits<float>::max(); // false for NaN and infinities
+}
 } // namespace
 
 FiniteRanks::FiniteRanks(const float * values, size_t count)
   : m_Values(values)
   , m_Size(count)
 {
-  Count();
+  m_Finite = static_cast<size_t>(std::count_if(values, values + count, Finite));
+  Sample();
 }
 
-FiniteRanks::FiniteRanks(const float * values, size_t count, float centre)
+FiniteRanks::FiniteRanks(const float * values, size_t count, size_t finite, float centre)
   : m_Values(values)
   , m_Size(count)
   , m_Deviation(true)
   , m_Centre(centre)
+  , m_Finite(finite)
 {
-  Count();
+  Sample();
 }
 
-template <typename TVisit>
+FiniteRanks
+FiniteRanks::Deviations(float centre) const
+{
+  return FiniteRanks(m_Values, m_Size, m_Finite, centre);
+}
+
+template <typename TBody>
 void
-FiniteRanks::ForEachFinite(TVisit && visit) const
+FiniteRanks::Transformed(TBody && body) const
 {
   if (m_Deviation)
   {
-    for (size_t i = 0; i < m_Size; ++i)
-    {
-      if (std::isfinite(m_Values[i]))
-      {
-        visit(i, std::abs(m_Values[i] - m_Centre));
-      }
-    }
+    body([c = m_Centre](float v) { return std::abs(v - c); });
   }
   else
   {
-    for (size_t i = 0; i < m_Size; ++i)
-    {
-      if (std::isfinite(m_Values[i]))
-      {
-        visit(i, m_Values[i]);
-      }
-    }
+    body([](float v) { return v; });
   }
 }
 
 void
-FiniteRanks::Count()
+FiniteRanks::Sample()
 {
-  ForEachFinite([this](size_t, float) { ++m_Finite; });
   const size_t stride = std::max<size_t>(1, m_Size / SampleSize);
-  for (size_t i = 0; i < m_Size; i += stride)
-  {
-    if (std::isfinite(m_Values[i]))
+  Transformed([&](auto transform) {
+    for (size_t i = 0; i < m_Size; i += stride)
     {
-      m_Sample.push_back(m_Deviation ? std::abs(m_Values[i] - m_Centre) : m_Values[i]);
+      if (Finite(m_Values[i]))
+      {
+        m_Sample.push_back(transform(m_Values[i]));
+      }
     }
-  }
+  });
   std::sort(m_Sample.begin(), m_Sample.end());
 }
 
 std::vector<float>
-FiniteRanks::Values(const std::vector<size_t> & ranks) const
+FiniteRanks::Quantiles(const std::vector<double> & q) const
 {
   constexpr float Infinity = std::numeric_limits<float>::infinity();
-  // Each rank's window of values from the sample (the whole line where the sample is too
-  // small to say), then one pass that counts the values below each window and keeps those in it.
-  const size_t        windows = ranks.size();
-  std::vector<float>  low(windows, -Infinity), high(windows, Infinity);
-  std::vector<size_t> below(windows, 0);
-  const auto          s = static_cast<double>(m_Sample.size());
-  for (size_t r = 0; r < windows; ++r)
+  if (m_Finite == 0)
   {
-    if (ranks[r] >= m_Finite)
-    {
-      throw std::out_of_range("FiniteRanks: rank beyond the finite values");
-    }
+    throw std::out_of_range("FiniteRanks: no finite value");
+  }
+  const auto         s = static_cast<double>(m_Sample.size());
+  std::vector<float> result;
+  for (const double p : q)
+  {
+    const size_t rank = std::min(m_Finite - 1, static_cast<size_t>(p * static_cast<double>(m_Finite - 1) + 0.5));
+    // The rank's window of values from the sample (the whole line where the sample is too
+    // small to say).
+    float lo = -Infinity, hi = Infinity;
     if (m_Sample.size() >= 64)
     {
-      const double q = static_cast<double>(ranks[r]) / std::max<double>(1.0, static_cast<double>(m_Finite - 1));
-      const double place = q * (s - 1.0), reach = WindowSpread * std::sqrt(s * q * (1.0 - q) + 1.0) + 1.0;
+      const double place = p * (s - 1.0), reach = WindowSpread * std::sqrt(s * p * (1.0 - p) + 1.0) + 1.0;
       if (place - reach >= 0.0)
       {
-        low[r] = m_Sample[static_cast<size_t>(place - reach)];
+        lo = m_Sample[static_cast<size_t>(place - reach)];
       }
       if (place + reach <= s - 1.0)
       {
-        high[r] = m_Sample[static_cast<size_t>(place + reach)];
+        hi = m_Sample[static_cast<size_t>(place + reach)];
       }
     }
-  }
-  // One pass per window, without a data-dependent branch (half the values lie below a
-  // median, and a mispredicted branch costs more than the rest of the loop): each value is
-  // written to a block and kept by advancing the block's end when it lies in the window.
-  std::vector<std::vector<float>> inside(windows);
-  for (size_t r = 0; r < windows; ++r)
-  {
-    const float          lo = low[r], hi = high[r];
-    size_t               count = 0, k = 0;
-    std::vector<float> & kept = inside[r];
-    constexpr size_t     Block = 1024;
-    float                block[Block];
-    const auto           pass = [&](auto transform) {
+    // One pass that counts the values below the window and keeps those in it, without a
+    // data-dependent branch (half the values lie below a median, and a mispredicted branch
+    // costs more than the rest of the loop): each value is written to a block and kept by
+    // advancing the block's end when it lies in the window.
+    size_t             below = 0;
+    std::vector<float> kept;
+    Transformed([&](auto transform) {
+      constexpr size_t Block = 1024;
+      float            block[Block];
+      size_t           k = 0;
       for (size_t i = 0; i < m_Size; ++i)
       {
         const float    v = transform(m_Values[i]);
-        const unsigned finite = std::abs(v) <= std::numeric_limits<float>::max() ? 1u : 0u;
-        const unsigned under = v < lo ? 1u : 0u, over = v > hi ? 1u : 0u; // NaN: neither
-        count += finite & under;
+        const unsigned finite = Finite(v) ? 1u : 0u;
+        const unsigned under = v < lo ? 1u : 0u, over = v > hi ? 1u : 0u;
+        below += finite & under;
         block[k] = v;
         k += finite & (1u - (under | over));
         if (k == Block)
@@ -144,42 +143,28 @@ FiniteRanks::Values(const std::vector<size_t> & ranks) const
           k = 0;
         }
       }
-    };
-    if (m_Deviation)
+      kept.insert(kept.end(), block, block + k);
+    });
+    if (rank < below || rank >= below + kept.size())
     {
-      pass([c = m_Centre](float v) { return std::abs(v - c); });
+      // The sample misled (values crowded or ordered against the sampling stride): all of them.
+      kept.clear();
+      below = 0;
+      Transformed([&](auto transform) {
+        for (size_t i = 0; i < m_Size; ++i)
+        {
+          if (Finite(m_Values[i]))
+          {
+            kept.push_back(transform(m_Values[i]));
+          }
+        }
+      });
     }
-    else
-    {
-      pass([](float v) { return v; });
-    }
-    kept.insert(kept.end(), block, block + k);
-    below[r] = count;
-  }
-  std::vector<float> result(windows);
-  for (size_t r = 0; r < windows; ++r)
-  {
-    std::vector<float> & values = inside[r];
-    if (ranks[r] < below[r] || ranks[r] >= below[r] + values.size())
-    {
-      // The sample misled (values crowded or ordered against the sampling stride): the
-      // whole line.
-      values.clear();
-      below[r] = 0;
-      ForEachFinite([&](size_t, float v) { values.push_back(v); });
-    }
-    const auto at = values.begin() + static_cast<std::ptrdiff_t>(ranks[r] - below[r]);
-    std::nth_element(values.begin(), at, values.end());
-    result[r] = *at;
+    const auto at = kept.begin() + static_cast<std::ptrdiff_t>(rank - below);
+    std::nth_element(kept.begin(), at, kept.end());
+    result.push_back(*at);
   }
   return result;
-}
-
-float
-FiniteRanks::Quantile(double q) const
-{
-  const size_t k = std::min(m_Finite - 1, static_cast<size_t>(q * static_cast<double>(m_Finite - 1) + 0.5));
-  return Value(k);
 }
 } // namespace detail
 } // end namespace itk

@@ -24,19 +24,22 @@
 namespace itk {
 namespace detail {
 /** Exact order statistics of the finite values of a float array (NaN and infinities are
- * left out), optionally of their absolute deviations |v - centre|, by sampled selection
- * (Floyd and Rivest, "Expected time bounds for selection", CACM 18(3), 1975): a regular
- * sample of about 8192 values, sorted, brackets each rank asked for between two of its
- * values; one pass over the data counts the values below each bracket and keeps those
- * inside it, and the rank is selected among those few. Where the bracket misses (the
- * sample misled), the rank is selected among all values. Exactly the values
- * std::nth_element over a copy gives, in two light passes of the data, whatever its
- * order. The data must outlive the object. */
+ * left out), or of their absolute deviations |v - centre|, by sampled selection (Floyd and
+ * Rivest, "Expected time bounds for selection", CACM 18(3), 1975): a regular sample of
+ * about 8192 values, sorted, brackets each rank asked for between two of its values; one
+ * pass over the data per rank counts the values below the bracket and keeps those inside
+ * it, and the rank is selected among those few. Where the bracket misses (the sample
+ * misled), the rank is selected among all values. Exactly the values std::nth_element over
+ * a copy gives, whatever the data's order, without copying it. The data must outlive the
+ * object. */
 class FiniteRanks
 {
 public:
   FiniteRanks(const float * values, size_t count);
-  FiniteRanks(const float * values, size_t count, float centre);
+
+  /** The ranks of the same values' absolute deviations from `centre` (their count known). */
+  FiniteRanks
+  Deviations(float centre) const;
 
   /** The number of finite values. */
   size_t
@@ -45,27 +48,24 @@ public:
     return m_Finite;
   }
 
-  /** The values of ranks `ranks` (0-based, each below GetCount()), in one pass. */
+  /** The values of ranks round(q (count - 1)) for each q in 0..1 (count above 0). */
   std::vector<float>
-  Values(const std::vector<size_t> & ranks) const;
+  Quantiles(const std::vector<double> & q) const;
 
-  /** The value of rank round(q (count - 1)) (q in 0..1), as a quantile. */
   float
-  Quantile(double q) const;
-
-  /** The value of rank k, one rank. */
-  float
-  Value(size_t k) const
+  Quantile(double q) const
   {
-    return Values({ k })[0];
+    return Quantiles({ q })[0];
   }
 
 private:
+  FiniteRanks(const float * values, size_t count, size_t finite, float centre);
   void
-  Count();
-  template <typename TVisit>
+  Sample();
+  /** Calls body(transform) with the map from a stored value to the value ranked. */
+  template <typename TBody>
   void
-  ForEachFinite(TVisit && visit) const;
+  Transformed(TBody && body) const;
 
   const float *      m_Values;
   size_t             m_Size;
@@ -74,7 +74,6 @@ private:
   size_t             m_Finite{ 0 };
   std::vector<float> m_Sample;
 };
-
 } // namespace detail
 } // end namespace itk
 
