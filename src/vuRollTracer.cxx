@@ -42,6 +42,10 @@ constexpr double PeakLevel = 0.3;
 constexpr double PeakProminence = 0.1;
 // Intensity, as a fraction of the contrast, above which a point is taken to hold material.
 constexpr double MaterialLevel = 0.5;
+// A crossing wider than this many typical sheet widths is two or more turns that touch: it
+// is split into as many crossings (one per sheet, not one at the band's middle, which lies
+// between two turns).
+constexpr double SplitWidth = 1.6;
 // The next crossing is accepted within this fraction of the local turn spacing.
 constexpr double AcceptWindow = 0.4;
 // Slices averaged on each side of the seed slice.
@@ -457,14 +461,23 @@ public:
       {
         ++last;
       }
-      double sum = 0.0, moment = 0.0;
-      for (long i = first; i <= last; ++i)
+      const double width = static_cast<double>(last - first + 1) * m_Frame.Dr;
+      const long   pieces =
+        m_SplitWidth > 0.0 && width > SplitWidth * m_SplitWidth ? std::max(2L, std::lround(width / m_SplitWidth)) : 1L;
+      for (long piece = 0; piece < pieces; ++piece)
       {
-        sum += p[i] - half;
-        moment += (p[i] - half) * static_cast<double>(i);
+        const long from = first + piece * (last - first + 1) / pieces;
+        const long to = first + (piece + 1) * (last - first + 1) / pieces - 1;
+        double     sum = 0.0, moment = 0.0;
+        for (long i = from; i <= to; ++i)
+        {
+          sum += p[i] - half;
+          moment += (p[i] - half) * static_cast<double>(i);
+        }
+        const double fallback = pieces > 1 ? 0.5 * static_cast<double>(from + to) : static_cast<double>(j);
+        const double centre = sum > 0.0 ? moment / sum : fallback;
+        crossings.push_back({ centre * m_Frame.Dr, static_cast<double>(to - from + 1) * m_Frame.Dr });
       }
-      const double centre = sum > 0.0 ? moment / sum : static_cast<double>(j);
-      crossings.push_back({ centre * m_Frame.Dr, static_cast<double>(last - first + 1) * m_Frame.Dr });
     }
     return crossings;
   }
@@ -484,6 +497,32 @@ public:
       }
     }
     return spacing;
+  }
+
+  // The crossing of `list` (sorted by radius) next beyond the turn before at `below`, in the
+  // direction of `next`, when the crossing after it lies within AcceptWindow turn spacings
+  // of `next` (the next turn): the turn between them, wherever it lies; list.size()
+  // otherwise.
+  size_t
+  Between(const std::vector<Crossing> & list, double below, double next, double spacing) const
+  {
+    const double apart = 0.6 * std::max(m_Width, m_Settings.Voxel);
+    const long   n = static_cast<long>(list.size());
+    const long   dir = next > below ? 1 : -1;
+    long         q = dir > 0 ? 0 : n - 1;
+    while (q >= 0 && q < n && dir * (list[static_cast<size_t>(q)].Radius - below) <= apart)
+    {
+      q += dir;
+    }
+    const long after = q + dir;
+    if (q < 0 || q >= n || after < 0 || after >= n)
+    {
+      return list.size();
+    }
+    const double turn = list[static_cast<size_t>(q)].Radius, beyond = list[static_cast<size_t>(after)].Radius;
+    const bool   nextMatches = std::abs(beyond - next) < AcceptWindow * spacing;
+    const bool   separate = dir * (beyond - turn) > apart;
+    return nextMatches && separate ? static_cast<size_t>(q) : list.size();
   }
 
   struct Step
@@ -645,6 +684,25 @@ public:
       {
         // The distance to the turn before changes (uneven winding): continue the radius.
         best = accept(last.Rho + slope * static_cast<double>(m - last.M));
+      }
+      if (best == list.size() && !outside && turnKnown && std::isfinite(below))
+      {
+        // Where a turn is pushed onto its neighbour (a touch) it leaves the prediction, and
+        // no crossing is near it; the turn is then the crossing between the turn before and
+        // the next turn, where the next turn is the crossing after it and lies where the
+        // next turn is expected. The step follows it but leaves the turn's shape and its
+        // distances alone (a touch is a bump, not the turn's course).
+        const double nextTurn = guided && prior->Covers(m + dir * m_Frame.Rays)
+                                  ? prior->At(m + dir * m_Frame.Rays) + offset
+                                  : predicted + turnOffset;
+        const size_t between = Between(list, below, nextTurn, std::abs(turnOffset));
+        if (between < list.size())
+        {
+          steps.push_back({ m, list[between].Radius, true });
+          radiusAt.back() = predicted;
+          missedArc = heldArc = 0.0;
+          continue;
+        }
       }
       if (best < list.size())
       {
@@ -901,6 +959,7 @@ public:
     }
     m_Pitch = spacings.empty() ? m_Frame.RMax : Median(spacings);
     m_Width = Median(widths);
+    m_SplitWidth = m_Width;
   }
 
   double
@@ -972,6 +1031,8 @@ private:
   PolarFrame              m_Frame;
   double                  m_Pitch{ 1.0 };
   double                  m_Width{ 1.0 };
+  // The typical width by which touching turns are split (0: not measured yet).
+  double m_SplitWidth{ 0.0 };
 };
 // Angular steps that make `arc` mm along a trace at radius rho (at least a voxel).
 double
@@ -1365,6 +1426,8 @@ TraceRoll(const SheetVolumeView &             volume,
       const PolarSlice polar = tracer.Sample(seed, around, true, true);
       result.Crossings = tracer.FindCrossings(polar, true);
       tracer.MeasurePitch(result.Crossings);
+      // Again, with touching turns split now that the typical width is known.
+      result.Crossings = tracer.FindCrossings(polar, true);
       result.Trace = tracer.TraceAlone(result.Crossings, seed);
       // The same slice turn by turn as minimal paths (TracePaths), kept where it passes
       // through clearly more of the crossings: where the follower crossed onto the next turn
