@@ -526,6 +526,65 @@ Circumradius(const double a[2], const double b[2], const double c[2])
 // Slices at most by which the mesh reaches past the last well-traced slice along the axis.
 constexpr long EdgeSlices = 8;
 
+// Weighted median of values (pairs of value and weight; reordered).
+double
+WeightedMedian(std::vector<std::pair<double, double>> & values)
+{
+  std::sort(values.begin(), values.end());
+  double total = 0.0;
+  for (const auto & v : values)
+  {
+    total += v.second;
+  }
+  double running = 0.0;
+  for (const auto & v : values)
+  {
+    running += v.second;
+    if (running >= 0.5 * total)
+    {
+      return v.first;
+    }
+  }
+  return values.back().first;
+}
+
+// Point of column c of a grid row from the slices of its window (slice, weight): the
+// weighted mean of the slices' points within `agreement` of their weighted median point
+// (the median alone where none is).
+void
+RobustRowPoint(const std::vector<std::pair<long, double>> & window,
+               const std::vector<Polyline> &                columnsOf,
+               size_t                                       c,
+               double                                       agreement,
+               double                                       point[2])
+{
+  std::vector<std::pair<double, double>> values;
+  values.reserve(window.size());
+  double median[2];
+  for (int axis = 0; axis < 2; ++axis)
+  {
+    values.clear();
+    for (const auto & [k, weight] : window)
+    {
+      values.emplace_back(columnsOf[static_cast<size_t>(k)][2 * c + static_cast<size_t>(axis)], weight);
+    }
+    median[axis] = WeightedMedian(values);
+  }
+  double sum[2] = { 0.0, 0.0 }, weightSum = 0.0;
+  for (const auto & [k, weight] : window)
+  {
+    const double * p = &columnsOf[static_cast<size_t>(k)][2 * c];
+    if (std::hypot(p[0] - median[0], p[1] - median[1]) <= agreement)
+    {
+      sum[0] += weight * p[0];
+      sum[1] += weight * p[1];
+      weightSum += weight;
+    }
+  }
+  point[0] = weightSum > 0.0 ? sum[0] / weightSum : median[0];
+  point[1] = weightSum > 0.0 ? sum[1] / weightSum : median[1];
+}
+
 } // namespace
 
 SheetMesh
@@ -1075,6 +1134,11 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
   const auto   rows = static_cast<size_t>(std::max(2.0, std::ceil(span / hw) + 1.0));
   const double rowSpacing = span / static_cast<double>(rows - 1);
   const double kernel = std::max(rowSpacing, sz);
+  // Slices whose point lies farther than this from the row's median point are left out of
+  // its mean: where a turn is pushed onto the next one in some slices of a row's window and
+  // not in others (a touch's edge along the axis), the mean would lie between the two, in
+  // the gap or on the neighbouring turn.
+  const double agreement = 0.5 * std::max(m_Report.SheetThickness, voxel);
   SheetMesh    mesh;
   mesh.GridRows = static_cast<int32_t>(rows);
   mesh.GridColumns = static_cast<int32_t>(columns);
@@ -1082,28 +1146,24 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
   mesh.GridIndex.resize(2 * rows * columns);
   for (size_t r = 0; r < rows; ++r)
   {
-    const double        z = static_cast<double>(firstGood) * sz - below + static_cast<double>(r) * rowSpacing;
-    const double        zc = std::clamp(z, static_cast<double>(firstGood) * sz, static_cast<double>(lastGood) * sz);
-    std::vector<double> sum(2 * columns, 0.0);
-    double              weightSum = 0.0;
+    const double z = static_cast<double>(firstGood) * sz - below + static_cast<double>(r) * rowSpacing;
+    const double zc = std::clamp(z, static_cast<double>(firstGood) * sz, static_cast<double>(lastGood) * sz);
+    std::vector<std::pair<long, double>> window;
     for (long k = firstGood; k <= lastGood; ++k)
     {
       const double weight = 1.0 - std::abs(static_cast<double>(k) * sz - zc) / kernel;
-      if (weight <= 0.0)
+      if (weight > 0.0)
       {
-        continue;
-      }
-      weightSum += weight;
-      for (size_t i = 0; i < 2 * columns; ++i)
-      {
-        sum[i] += weight * columnsOf[k][i];
+        window.emplace_back(k, weight);
       }
     }
     for (size_t c = 0; c < columns; ++c)
     {
       const size_t p = r * columns + c;
-      mesh.Points[3 * p] = sum[2 * c] / weightSum;
-      mesh.Points[3 * p + 1] = sum[2 * c + 1] / weightSum;
+      double       point[2];
+      RobustRowPoint(window, columnsOf, c, agreement, point);
+      mesh.Points[3 * p] = point[0];
+      mesh.Points[3 * p + 1] = point[1];
       mesh.Points[3 * p + 2] = z;
       mesh.GridIndex[2 * p] = static_cast<int32_t>(r);
       mesh.GridIndex[2 * p + 1] = static_cast<int32_t>(c);

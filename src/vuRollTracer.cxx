@@ -214,7 +214,41 @@ struct Crossing
 {
   double Radius;
   double Width;
+  // A band of touching turns (wider than SplitWidth typical widths): the middles of its
+  // innermost and outermost sheets; Radius for one sheet.
+  double Inner;
+  double Outer;
+
+  bool
+  Band() const
+  {
+    return Inner != Outer;
+  }
+  // The sheet of the crossing nearest `target`: a band's inner or outer sheet, never its
+  // middle, which lies between two turns.
+  double
+  SheetNear(double target) const
+  {
+    return !Band() ? Radius : std::abs(Inner - target) <= std::abs(Outer - target) ? Inner : Outer;
+  }
 };
+
+// The radii of the sheets a ray crosses, in order: a band's inner and outer sheets apart.
+std::vector<double>
+SheetRadii(const std::vector<Crossing> & list)
+{
+  std::vector<double> radii;
+  radii.reserve(list.size() + 2);
+  for (const Crossing & c : list)
+  {
+    radii.push_back(c.Inner);
+    if (c.Band())
+    {
+      radii.push_back(c.Outer);
+    }
+  }
+  return radii;
+}
 
 // The polar frame shared by all slices: ray a at angle a * Step, samples j * Dr from the
 // slice's centre. One angular index m = a + turn * Rays runs along the spiral.
@@ -395,6 +429,7 @@ public:
       3,
       [&](SizeValueType q) {
         traces[q] = TraceSpiralPath(polar, reference, reference.First + quarters[q] * length / 4, settings);
+        SnapToCrossings(traces[q], crossings);
         explained[q] = traces[q].Empty() ? -1.0 : Explained(crossings, traces[q]);
       },
       nullptr);
@@ -404,6 +439,34 @@ public:
       best = explained[q] > explained[best] ? q : best;
     }
     return explained[best] > -1.0 ? traces[best] : Trace{};
+  }
+
+  // Each step of a trace moved to the crossing of its ray nearest it, if that lies within
+  // AcceptWindow of the turn spacing and not on the turn before (inwards), which took it
+  // already: where two turns touch, the path of the outer one may keep to the least distance
+  // from the inner one, between the two sheets, while the split band has a crossing on each.
+  void
+  SnapToCrossings(Trace & trace, const SliceCrossings & crossings) const
+  {
+    const double apart = 0.6 * std::max(m_Width, m_Settings.Voxel);
+    const double window = AcceptWindow * m_Pitch;
+    for (long m = trace.First; m <= trace.Last(); ++m)
+    {
+      const auto   a = static_cast<size_t>(((m % m_Frame.Rays) + m_Frame.Rays) % m_Frame.Rays);
+      const double rho = trace.At(m);
+      const double inner = trace.Covers(m - m_Frame.Rays) ? trace.At(m - m_Frame.Rays) : -1.0;
+      double       best = rho, bestDistance = window;
+      for (const double radius : SheetRadii(crossings.Rays[a]))
+      {
+        const double d = std::abs(radius - rho);
+        if (d < bestDistance && !(inner >= 0.0 && radius - inner < apart))
+        {
+          best = radius;
+          bestDistance = d;
+        }
+      }
+      trace.Rho[static_cast<size_t>(m - trace.First)] = best;
+    }
   }
 
   // Local maxima of a profile (fraction of the contrast) that rise above air by PeakLevel of the contrast and stand out
@@ -461,23 +524,30 @@ public:
       {
         ++last;
       }
-      const double width = static_cast<double>(last - first + 1) * m_Frame.Dr;
-      const long   pieces =
-        m_SplitWidth > 0.0 && width > SplitWidth * m_SplitWidth ? std::max(2L, std::lround(width / m_SplitWidth)) : 1L;
-      for (long piece = 0; piece < pieces; ++piece)
-      {
-        const long from = first + piece * (last - first + 1) / pieces;
-        const long to = first + (piece + 1) * (last - first + 1) / pieces - 1;
-        double     sum = 0.0, moment = 0.0;
+      // Centroid (sub-voxel) of p - half over [from, to]; `fallback` where it is empty.
+      auto centroid = [&](long from, long to, double fallback) {
+        double sum = 0.0, moment = 0.0;
         for (long i = from; i <= to; ++i)
         {
           sum += p[i] - half;
           moment += (p[i] - half) * static_cast<double>(i);
         }
-        const double fallback = pieces > 1 ? 0.5 * static_cast<double>(from + to) : static_cast<double>(j);
-        const double centre = sum > 0.0 ? moment / sum : fallback;
-        crossings.push_back({ centre * m_Frame.Dr, static_cast<double>(to - from + 1) * m_Frame.Dr });
+        return (sum > 0.0 ? moment / sum : fallback) * m_Frame.Dr;
+      };
+      const long   count = last - first + 1;
+      const double width = static_cast<double>(count) * m_Frame.Dr;
+      Crossing     crossing;
+      crossing.Radius = centroid(first, last, static_cast<double>(j));
+      crossing.Width = width;
+      crossing.Inner = crossing.Outer = crossing.Radius;
+      if (m_SplitWidth > 0.0 && width > SplitWidth * m_SplitWidth)
+      {
+        const long pieces = std::max(2L, std::lround(width / m_SplitWidth));
+        const long inner = first + count / pieces - 1, outer = first + (pieces - 1) * count / pieces;
+        crossing.Inner = centroid(first, inner, 0.5 * static_cast<double>(first + inner));
+        crossing.Outer = centroid(outer, last, 0.5 * static_cast<double>(outer + last));
       }
+      crossings.push_back(crossing);
     }
     return crossings;
   }
@@ -499,30 +569,30 @@ public:
     return spacing;
   }
 
-  // The crossing of `list` (sorted by radius) next beyond the turn before at `below`, in the
-  // direction of `next`, when the crossing after it lies within AcceptWindow turn spacings
-  // of `next` (the next turn): the turn between them, wherever it lies; list.size()
-  // otherwise.
-  size_t
+  // The sheet a ray crosses next beyond the turn before at `below`, in the direction of
+  // `next`, when the sheet after it lies within AcceptWindow turn spacings of `next` (the
+  // next turn): the turn between them, wherever it lies; NaN otherwise.
+  double
   Between(const std::vector<Crossing> & list, double below, double next, double spacing) const
   {
-    const double apart = 0.6 * std::max(m_Width, m_Settings.Voxel);
-    const long   n = static_cast<long>(list.size());
-    const long   dir = next > below ? 1 : -1;
-    long         q = dir > 0 ? 0 : n - 1;
-    while (q >= 0 && q < n && dir * (list[static_cast<size_t>(q)].Radius - below) <= apart)
+    const double              apart = 0.6 * std::max(m_Width, m_Settings.Voxel);
+    const std::vector<double> radii = SheetRadii(list);
+    const long                n = static_cast<long>(radii.size());
+    const long                dir = next > below ? 1 : -1;
+    long                      q = dir > 0 ? 0 : n - 1;
+    while (q >= 0 && q < n && dir * (radii[static_cast<size_t>(q)] - below) <= apart)
     {
       q += dir;
     }
     const long after = q + dir;
     if (q < 0 || q >= n || after < 0 || after >= n)
     {
-      return list.size();
+      return std::numeric_limits<double>::quiet_NaN();
     }
-    const double turn = list[static_cast<size_t>(q)].Radius, beyond = list[static_cast<size_t>(after)].Radius;
+    const double turn = radii[static_cast<size_t>(q)], beyond = radii[static_cast<size_t>(after)];
     const bool   nextMatches = std::abs(beyond - next) < AcceptWindow * spacing;
     const bool   separate = dir * (beyond - turn) > apart;
-    return nextMatches && separate ? static_cast<size_t>(q) : list.size();
+    return nextMatches && separate ? turn : std::numeric_limits<double>::quiet_NaN();
   }
 
   struct Step
@@ -574,6 +644,13 @@ public:
       return step >= m_Frame.Rays ? radiusAt[static_cast<size_t>(step - m_Frame.Rays)]
                                   : oppositeAt[static_cast<size_t>(step)];
     };
+    // Where the turn before was pushed onto this one (a touch), the radius it took there;
+    // its shape (radiusAt) leaves the bump out. NaN elsewhere.
+    std::vector<double> bumpAt{ std::numeric_limits<double>::quiet_NaN() };
+    auto                bumpBefore = [&](long step) {
+      return step >= m_Frame.Rays ? bumpAt[static_cast<size_t>(step - m_Frame.Rays)]
+                                                 : std::numeric_limits<double>::quiet_NaN();
+    };
     double              turnOffset = 0.0;
     bool                turnKnown = false;
     std::vector<double> distances;
@@ -599,6 +676,8 @@ public:
     for (long step = 1; step < maximumSteps; ++step)
     {
       radiusAt.push_back(std::numeric_limits<double>::quiet_NaN());
+      bumpAt.push_back(std::numeric_limits<double>::quiet_NaN());
+      const double bump = bumpBefore(step);
       const long   m = start + dir * step;
       const auto   a = static_cast<size_t>(((m % m_Frame.Rays) + m_Frame.Rays) % m_Frame.Rays);
       const Step & last = confirmed.back();
@@ -638,8 +717,10 @@ public:
       }
       // The crossing nearest a prediction, if it is near enough to it (and to the last
       // accepted radius) and not on the turn traced one revolution before (the trace would
-      // circle); list.size() otherwise.
-      auto accept = [&](double target) {
+      // circle); list.size() otherwise. `sheet`: the radius of its sheet nearest the
+      // prediction (a band of touching turns: its inner or outer sheet).
+      double sheet = 0.0;
+      auto   accept = [&](double target) {
         const auto it =
           std::lower_bound(list.begin(), list.end(), target, [](const Crossing & c, double r) { return c.Radius < r; });
         size_t best = list.size();
@@ -675,8 +756,10 @@ public:
         }
         const double window = AcceptWindow * std::max(spacing, voxel);
         const double apart = 0.6 * std::max(m_Width, voxel);
-        const bool   near = bestDistance < window && (guided || std::abs(list[best].Radius - lastCarried) < window);
-        const bool   circling = std::isfinite(below) && std::abs(list[best].Radius - below) < apart;
+        sheet = list[best].SheetNear(target);
+        const bool near = bestDistance < window && (guided || std::abs(sheet - lastCarried) < window);
+        const bool circling = (std::isfinite(below) && std::abs(sheet - below) < apart) ||
+                              (std::isfinite(bump) && std::abs(sheet - bump) < apart);
         return near && !circling ? best : list.size();
       };
       size_t best = accept(predicted);
@@ -695,18 +778,20 @@ public:
         const double nextTurn = guided && prior->Covers(m + dir * m_Frame.Rays)
                                   ? prior->At(m + dir * m_Frame.Rays) + offset
                                   : predicted + turnOffset;
-        const size_t between = Between(list, below, nextTurn, std::abs(turnOffset));
-        if (between < list.size())
+        const double from = std::isfinite(bump) && (bump - below) * turnOffset > 0.0 ? bump : below;
+        const double between = Between(list, from, nextTurn, std::abs(turnOffset));
+        if (std::isfinite(between))
         {
-          steps.push_back({ m, list[between].Radius, true });
+          steps.push_back({ m, between, true });
           radiusAt.back() = predicted;
+          bumpAt.back() = between;
           missedArc = heldArc = 0.0;
           continue;
         }
       }
       if (best < list.size())
       {
-        const double r = list[best].Radius;
+        const double r = sheet;
         steps.push_back({ m, r, true });
         confirmed.push_back({ m, r, true });
         radiusAt.back() = r;
