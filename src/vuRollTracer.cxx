@@ -448,7 +448,7 @@ public:
   void
   SnapToCrossings(Trace & trace, const SliceCrossings & crossings) const
   {
-    const double apart = 0.6 * std::max(m_Width, m_Settings.Voxel);
+    const double apart = Apart();
     const double window = AcceptWindow * m_Pitch;
     for (long m = trace.First; m <= trace.Last(); ++m)
     {
@@ -540,9 +540,9 @@ public:
       crossing.Radius = centroid(first, last, static_cast<double>(j));
       crossing.Width = width;
       crossing.Inner = crossing.Outer = crossing.Radius;
-      if (m_SplitWidth > 0.0 && width > SplitWidth * m_SplitWidth)
+      if (m_WidthMeasured && width > SplitWidth * m_Width)
       {
-        const long pieces = std::max(2L, std::lround(width / m_SplitWidth));
+        const long pieces = std::max(2L, std::lround(width / m_Width));
         const long inner = first + count / pieces - 1, outer = first + (pieces - 1) * count / pieces;
         crossing.Inner = centroid(first, inner, 0.5 * static_cast<double>(first + inner));
         crossing.Outer = centroid(outer, last, 0.5 * static_cast<double>(outer + last));
@@ -575,7 +575,7 @@ public:
   double
   Between(const std::vector<Crossing> & list, double below, double next, double spacing) const
   {
-    const double              apart = 0.6 * std::max(m_Width, m_Settings.Voxel);
+    const double              apart = Apart();
     const std::vector<double> radii = SheetRadii(list);
     const long                n = static_cast<long>(radii.size());
     const long                dir = next > below ? 1 : -1;
@@ -755,7 +755,7 @@ public:
           }
         }
         const double window = AcceptWindow * std::max(spacing, voxel);
-        const double apart = 0.6 * std::max(m_Width, voxel);
+        const double apart = Apart();
         sheet = list[best].SheetNear(target);
         const bool near = bestDistance < window && (guided || std::abs(sheet - lastCarried) < window);
         const bool circling = (std::isfinite(below) && std::abs(sheet - below) < apart) ||
@@ -1026,6 +1026,14 @@ public:
     return growth >= 0.6 * m_Pitch && growth <= most * m_Pitch;
   }
 
+  // Least distance between the middles of two turns (they touch a sheet's thickness apart):
+  // a crossing nearer the turn before than this is that turn again.
+  double
+  Apart() const
+  {
+    return 0.6 * std::max(m_Width, m_Settings.Voxel);
+  }
+
   // Median spacing of successive crossings and median crossing width.
   void
   MeasurePitch(const SliceCrossings & crossings)
@@ -1044,7 +1052,7 @@ public:
     }
     m_Pitch = spacings.empty() ? m_Frame.RMax : Median(spacings);
     m_Width = Median(widths);
-    m_SplitWidth = m_Width;
+    m_WidthMeasured = true;
   }
 
   double
@@ -1116,8 +1124,8 @@ private:
   PolarFrame              m_Frame;
   double                  m_Pitch{ 1.0 };
   double                  m_Width{ 1.0 };
-  // The typical width by which touching turns are split (0: not measured yet).
-  double m_SplitWidth{ 0.0 };
+  // Whether m_Width was measured (bands of touching turns are told apart only then).
+  bool m_WidthMeasured{ false };
 };
 // Angular steps that make `arc` mm along a trace at radius rho (at least a voxel).
 double
