@@ -27,6 +27,7 @@ itk_module(VirtualUnwrapping
     ITKImageIntensity
     ITKImageNoise
     ITKImageFeature
+    ITKImageGradient
     ITKImageSources
     ITKDeconvolution
     ITKSmoothing
