@@ -29,6 +29,7 @@
 #include "itkSmoothingRecursiveGaussianImageFilter.h"
 
 #include <array>
+#include <climits>
 #include <numeric>
 #include <sstream>
 
@@ -88,92 +89,171 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   {
     itkExceptionMacro(<< "the mask is empty");
   }
-  std::vector<std::string> warnings;
-  if (relabel->GetNumberOfObjects() > 1)
+  // A roll cut by the field of view falls apart into its inner part and the arcs of its
+  // outer turns, which wrap around it: pieces whose boxes overlap the largest piece's are
+  // meshed with it when they trace as one roll (the roll tracer carries its turns through
+  // the part out of view). Otherwise, and for pieces apart from it, only the largest.
+  const SizeValueType              objects = relabel->GetNumberOfObjects();
+  std::vector<std::array<long, 6>> boxes(objects, { LONG_MAX, LONG_MAX, LONG_MAX, LONG_MIN, LONG_MIN, LONG_MIN });
   {
-    std::ostringstream text;
-    text << "the mask holds " << relabel->GetNumberOfObjects() << " disconnected pieces; only the largest ("
-         << relabel->GetSizeOfObjectsInPixels()[0] << " of "
-         << std::accumulate(relabel->GetSizeOfObjectsInPixels().begin(),
-                            relabel->GetSizeOfObjectsInPixels().end(),
-                            SizeValueType{ 0 })
-         << " voxels) was meshed";
-    warnings.push_back(text.str());
-  }
-
-  // Read only the bounding box of that sheet, plus two voxels.
-  const typename MaskImageType::RegionType box = BoundingRegionWhere(
-    labels, [](SizeValueType label) { return label == 1; }, 2);
-
-  // The sheet's box as images of their own (index 0 at the box corner).
-  using SheetImageType = Image<uint8_t, 3>;
-  typename SheetImageType::RegionType boxRegion;
-  boxRegion.SetSize(box.GetSize());
-  typename SheetImageType::PointType boxOrigin;
-  mask->TransformIndexToPhysicalPoint(box.GetIndex(), boxOrigin);
-  auto sheetMask = SheetImageType::New();
-  sheetMask->SetRegions(boxRegion);
-  sheetMask->SetOrigin(boxOrigin);
-  sheetMask->SetSpacing(mask->GetSpacing());
-  sheetMask->SetDirection(mask->GetDirection());
-  sheetMask->Allocate();
-  typename IntensityImageType::Pointer sheetIntensity;
-  if (intensity != nullptr)
-  {
-    sheetIntensity = IntensityImageType::New();
-    sheetIntensity->CopyInformation(sheetMask);
-    sheetIntensity->SetRegions(boxRegion);
-    sheetIntensity->Allocate();
-  }
-  {
-    // Row by row, the slices in parallel; the intensities lie where the labels do.
-    const auto boxSize = box.GetSize();
-    ForEachImageRow(labels, box, [&](SizeValueType k, SizeValueType j, const SizeValueType * label) {
-      const SizeValueType to = (k * boxSize[1] + j) * boxSize[0];
-      uint8_t *           out = sheetMask->GetBufferPointer() + to;
-      for (SizeValueType i = 0; i < boxSize[0]; ++i)
+    const auto            size = region.GetSize();
+    const SizeValueType * label = labels->GetBufferPointer();
+    for (size_t k = 0; k < size[2]; ++k)
+    {
+      for (size_t j = 0; j < size[1]; ++j)
       {
-        out[i] = label[i] == 1 ? 1 : 0;
+        for (size_t i = 0; i < size[0]; ++i, ++label)
+        {
+          if (*label != 0)
+          {
+            auto &     box = boxes[*label - 1];
+            const long index[3] = { static_cast<long>(i), static_cast<long>(j), static_cast<long>(k) };
+            for (unsigned d = 0; d < 3; ++d)
+            {
+              box[d] = std::min(box[d], index[d]);
+              box[3 + d] = std::max(box[3 + d], index[d]);
+            }
+          }
+        }
       }
-      if (intensity != nullptr)
-      {
-        std::copy_n(intensity->GetBufferPointer() + (label - labels->GetBufferPointer()),
-                    boxSize[0],
-                    sheetIntensity->GetBufferPointer() + to);
-      }
+    }
+  }
+  std::vector<uint8_t> withLargest(objects + 1, 0);
+  withLargest[1] = 1;
+  SizeValueType overlapping = 1;
+  for (SizeValueType l = 2; l <= objects; ++l)
+  {
+    bool overlaps = true;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      overlaps = overlaps && boxes[l - 1][d] <= boxes[0][3 + d] && boxes[0][d] <= boxes[l - 1][3 + d];
+    }
+    withLargest[l] = overlaps ? 1 : 0;
+    overlapping += overlaps ? 1 : 0;
+  }
+  const std::vector<uint8_t> largestOnly{ 0, 1 };
+  auto                       meshPieces = [&](const std::vector<uint8_t> &       keep,
+                        std::vector<std::string> &         warnings,
+                        typename SheetImageType::Pointer & sheetMask) {
+    auto kept = [&keep](SizeValueType label) { return label < keep.size() && keep[label] != 0; };
+    // Read only the bounding box of the sheet, plus two voxels.
+    const typename MaskImageType::RegionType box = BoundingRegionWhere(labels, kept, 2);
+
+    // The sheet's box as images of their own (index 0 at the box corner).
+    typename SheetImageType::RegionType boxRegion;
+    boxRegion.SetSize(box.GetSize());
+    typename SheetImageType::PointType boxOrigin;
+    mask->TransformIndexToPhysicalPoint(box.GetIndex(), boxOrigin);
+    sheetMask = SheetImageType::New();
+    sheetMask->SetRegions(boxRegion);
+    sheetMask->SetOrigin(boxOrigin);
+    sheetMask->SetSpacing(mask->GetSpacing());
+    sheetMask->SetDirection(mask->GetDirection());
+    sheetMask->Allocate();
+    typename IntensityImageType::Pointer sheetIntensity;
+    if (intensity != nullptr)
+    {
+      sheetIntensity = IntensityImageType::New();
+      sheetIntensity->CopyInformation(sheetMask);
+      sheetIntensity->SetRegions(boxRegion);
+      sheetIntensity->Allocate();
+    }
+    {
+      // Row by row, the slices in parallel; the intensities lie where the labels do.
+      const auto boxSize = box.GetSize();
+      ForEachImageRow(labels, box, [&](SizeValueType k, SizeValueType j, const SizeValueType * label) {
+        const SizeValueType to = (k * boxSize[1] + j) * boxSize[0];
+        uint8_t *           out = sheetMask->GetBufferPointer() + to;
+        for (SizeValueType i = 0; i < boxSize[0]; ++i)
+        {
+          out[i] = kept(label[i]) ? 1 : 0;
+        }
+        if (intensity != nullptr)
+        {
+          std::copy_n(intensity->GetBufferPointer() + (label - labels->GetBufferPointer()),
+                      boxSize[0],
+                      sheetIntensity->GetBufferPointer() + to);
+        }
+      });
+    }
+    typename SheetImageType::Pointer sheetData;
+    const bool axisKnown = this->AlignWithRollAxis(sheetMask, sheetIntensity, sheetData, warnings);
+    if (sheetIntensity)
+    {
+      this->Denoise(sheetMask, sheetIntensity, warnings);
+    }
+
+    SheetVolumeView view;
+    view.Mask = sheetMask->GetBufferPointer();
+    view.Intensity = sheetIntensity ? sheetIntensity->GetBufferPointer() : nullptr;
+    view.Data = sheetData ? sheetData->GetBufferPointer() : nullptr;
+    view.AxisAlongSlices = axisKnown;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      view.Size[d] = sheetMask->GetBufferedRegion().GetSize()[d];
+      view.Spacing[d] = sheetMask->GetSpacing()[d];
+    }
+
+    SheetMidSurfaceExtractor  extractor;
+    SheetMidSurfaceParameters parameters;
+    parameters.Method = m_Method;
+    parameters.SpacingAlongSheet = m_SpacingAlongSheet;
+    parameters.SpacingAlongAxis = m_SpacingAlongAxis;
+    parameters.ChordErrorFraction = m_ChordErrorFraction;
+    extractor.SetParameters(parameters);
+    extractor.SetProgressCallback([this](double fraction) {
+      this->UpdateProgress(static_cast<float>(0.1 + 0.9 * fraction));
+      return !this->GetAbortGenerateData();
     });
-  }
-  typename SheetImageType::Pointer sheetData;
-  const bool                       axisKnown = this->AlignWithRollAxis(sheetMask, sheetIntensity, sheetData, warnings);
-  if (sheetIntensity)
+    SheetMesh sheet = extractor.Extract(view);
+    m_Report = extractor.GetReport();
+    return sheet;
+  };
+  std::vector<std::string>         warnings;
+  typename SheetImageType::Pointer sheetMask;
+  SheetMesh                        sheet;
+  SizeValueType                    meshed = 1;
+  if (overlapping > 1 && m_Method != SheetSurfaceMethodEnum::General)
   {
-    this->Denoise(sheetMask, sheetIntensity, warnings);
+    try
+    {
+      sheet = meshPieces(withLargest, warnings, sheetMask);
+      meshed = m_Report.Method == SheetSurfaceMethodEnum::Roll ? overlapping : 1;
+    }
+    catch (const ExceptionObject &)
+    {
+      if (this->GetAbortGenerateData())
+      {
+        throw;
+      }
+    }
   }
-
-  SheetVolumeView view;
-  view.Mask = sheetMask->GetBufferPointer();
-  view.Intensity = sheetIntensity ? sheetIntensity->GetBufferPointer() : nullptr;
-  view.Data = sheetData ? sheetData->GetBufferPointer() : nullptr;
-  view.AxisAlongSlices = axisKnown;
-  for (unsigned d = 0; d < 3; ++d)
+  if (meshed == 1)
   {
-    view.Size[d] = sheetMask->GetBufferedRegion().GetSize()[d];
-    view.Spacing[d] = sheetMask->GetSpacing()[d];
+    warnings.clear();
+    sheet = meshPieces(largestOnly, warnings, sheetMask);
   }
-
-  SheetMidSurfaceExtractor  extractor;
-  SheetMidSurfaceParameters parameters;
-  parameters.Method = m_Method;
-  parameters.SpacingAlongSheet = m_SpacingAlongSheet;
-  parameters.SpacingAlongAxis = m_SpacingAlongAxis;
-  parameters.ChordErrorFraction = m_ChordErrorFraction;
-  extractor.SetParameters(parameters);
-  extractor.SetProgressCallback([this](double fraction) {
-    this->UpdateProgress(static_cast<float>(0.1 + 0.9 * fraction));
-    return !this->GetAbortGenerateData();
-  });
-  SheetMesh sheet = extractor.Extract(view);
-  m_Report = extractor.GetReport();
+  if (objects > 1)
+  {
+    const auto &       sizes = relabel->GetSizeOfObjectsInPixels();
+    std::ostringstream text;
+    text << "the mask holds " << objects << " disconnected pieces; ";
+    if (meshed == 1)
+    {
+      text << "only the largest (" << sizes[0];
+    }
+    else
+    {
+      SizeValueType voxels = 0;
+      for (SizeValueType l = 1; l <= objects; ++l)
+      {
+        voxels += withLargest[l] != 0 ? sizes[l - 1] : 0;
+      }
+      text << "the largest and the " << meshed - 1 << " around it, cut by the field of view (" << voxels;
+    }
+    text << " of " << std::accumulate(sizes.begin(), sizes.end(), SizeValueType{ 0 }) << " voxels) was meshed";
+    warnings.insert(warnings.begin(), text.str());
+  }
   m_Report.Warnings.insert(m_Report.Warnings.begin(), warnings.begin(), warnings.end());
 
   // From the (possibly resampled) box's scaled voxel frame to the physical frame.
@@ -255,26 +335,25 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::EstimateRollAxis(const Sheet
   // Slice by slice in parallel, then summed in slice order (the same sum on any number of
   // threads).
   std::vector<std::array<double, 9>> sliceTensors(size[2], std::array<double, 9>{});
-  ForEachImageRow(
-    sheetMask, sheetMask->GetBufferedRegion(), [&](SizeValueType k, SizeValueType, const uint8_t * row) {
-      std::array<double, 9> & sum = sliceTensors[k];
-      const auto *            gradientRow = gradients + (row - mask);
-      for (size_t i = 0; i < size[0]; ++i)
+  ForEachImageRow(sheetMask, sheetMask->GetBufferedRegion(), [&](SizeValueType k, SizeValueType, const uint8_t * row) {
+    std::array<double, 9> & sum = sliceTensors[k];
+    const auto *            gradientRow = gradients + (row - mask);
+    for (size_t i = 0; i < size[0]; ++i)
+    {
+      if (row[i] == 0)
       {
-        if (row[i] == 0)
+        continue;
+      }
+      const auto & physical = gradientRow[i];
+      for (unsigned r = 0; r < 3; ++r)
+      {
+        for (unsigned c = 0; c < 3; ++c)
         {
-          continue;
-        }
-        const auto & physical = gradientRow[i];
-        for (unsigned r = 0; r < 3; ++r)
-        {
-          for (unsigned c = 0; c < 3; ++c)
-          {
-            sum[3 * r + c] += static_cast<double>(physical[r]) * static_cast<double>(physical[c]);
-          }
+          sum[3 * r + c] += static_cast<double>(physical[r]) * static_cast<double>(physical[c]);
         }
       }
-    });
+    }
+  });
   vnl_matrix<double> tensor(3, 3, 0.0);
   for (const auto & sum : sliceTensors)
   {

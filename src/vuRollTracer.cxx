@@ -42,10 +42,13 @@ constexpr double PeakLevel = 0.3;
 constexpr double PeakProminence = 0.1;
 // Intensity, as a fraction of the contrast, above which a point is taken to hold material.
 constexpr double MaterialLevel = 0.5;
-// A crossing wider than this many typical sheet widths is two or more turns that touch: it
-// is split into as many crossings (one per sheet, not one at the band's middle, which lies
-// between two turns).
+// A crossing wider than this many typical sheet widths, or holding this many times the
+// typical sheet's material (its profile's area: blur widens a sheet but leaves its area
+// alone, so two blurred sheets that touch are barely wider than one but hold twice its
+// material), is two or more turns that touch: it is traced on its inner or outer sheet,
+// never on its middle, which lies between two turns.
 constexpr double SplitWidth = 1.6;
+constexpr double SplitMass = 1.6;
 // The next crossing is accepted within this fraction of the local turn spacing.
 constexpr double AcceptWindow = 0.4;
 // Slices averaged on each side of the seed slice.
@@ -214,6 +217,8 @@ struct Crossing
 {
   double Radius;
   double Width;
+  // Area of the profile over the crossing (fraction of the contrast times length).
+  double Mass;
   // A band of touching turns (wider than SplitWidth typical widths): the middles of its
   // innermost and outermost sheets; Radius for one sheet.
   double Inner;
@@ -539,10 +544,12 @@ public:
       Crossing     crossing;
       crossing.Radius = centroid(first, last, static_cast<double>(j));
       crossing.Width = width;
+      crossing.Mass = std::accumulate(p.begin() + first, p.begin() + last + 1, 0.0) * m_Frame.Dr;
       crossing.Inner = crossing.Outer = crossing.Radius;
-      if (m_WidthMeasured && width > SplitWidth * m_Width)
+      const double widths = width / m_Width, masses = crossing.Mass / m_Mass;
+      if (m_WidthMeasured && (widths > SplitWidth || masses > SplitMass))
       {
-        const long pieces = std::max(2L, std::lround(width / m_Width));
+        const long pieces = std::max(2L, std::lround(std::max(widths, masses)));
         const long inner = first + count / pieces - 1, outer = first + (pieces - 1) * count / pieces;
         crossing.Inner = centroid(first, inner, 0.5 * static_cast<double>(first + inner));
         crossing.Outer = centroid(outer, last, 0.5 * static_cast<double>(outer + last));
@@ -1038,12 +1045,13 @@ public:
   void
   MeasurePitch(const SliceCrossings & crossings)
   {
-    std::vector<double> spacings, widths;
+    std::vector<double> spacings, widths, masses;
     for (const auto & list : crossings.Rays)
     {
       for (size_t q = 0; q < list.size(); ++q)
       {
         widths.push_back(list[q].Width);
+        masses.push_back(list[q].Mass);
         if (q > 0)
         {
           spacings.push_back(list[q].Radius - list[q - 1].Radius);
@@ -1052,7 +1060,8 @@ public:
     }
     m_Pitch = spacings.empty() ? m_Frame.RMax : Median(spacings);
     m_Width = Median(widths);
-    m_WidthMeasured = true;
+    m_Mass = Median(masses);
+    m_WidthMeasured = m_Width > 0.0 && m_Mass > 0.0;
   }
 
   double
@@ -1124,7 +1133,10 @@ private:
   PolarFrame              m_Frame;
   double                  m_Pitch{ 1.0 };
   double                  m_Width{ 1.0 };
-  // Whether m_Width was measured (bands of touching turns are told apart only then).
+  // The typical sheet's crossing's area (Crossing::Mass).
+  double m_Mass{ 1.0 };
+  // Whether m_Width and m_Mass were measured (bands of touching turns are told apart only
+  // then).
   bool m_WidthMeasured{ false };
 };
 // Angular steps that make `arc` mm along a trace at radius rho (at least a voxel).

@@ -20,6 +20,7 @@
 #include "itkMassSpringSheetFlattener.h"
 #include "itkMeshFileWriter.h"
 #include "itkQuadEdgeMesh.h"
+#include "itkRegionOfInterestImageFilter.h"
 #include "itkSheetMeshErrorCalculator.h"
 #include "itkSheetMidSurfaceMeshFilter.h"
 #include "itkSheetPhantomSource.h"
@@ -352,6 +353,47 @@ TEST(SheetMidSurfaceMeshFilter, BadInputThrows)
   filter->SetChordErrorFraction(0.1);
   filter->SetInput(single);
   EXPECT_THROW(filter->Update(), itk::ExceptionObject); // one slice only
+}
+
+// A field of view that cuts the roll on one side leaves its inner part in one piece and the
+// outer turns as arcs around it: the arcs are meshed with it, through the part out of view.
+TEST(SheetMidSurfaceMeshFilter, RollCutByTheFieldOfViewIsMeshedWhole)
+{
+  auto source = itk::SheetPhantomSource::New();
+  source->ApplyPreset("standard");
+  source->Update();
+  const auto whole = source->GetOutput()->GetLargestPossibleRegion();
+  auto       region = whole;
+  const auto cut = static_cast<itk::IndexValueType>(whole.GetSize()[0] / 8);
+  region.SetIndex(0, whole.GetIndex(0) + cut);
+  region.SetSize(0, whole.GetSize()[0] - static_cast<itk::SizeValueType>(cut));
+  auto crop = itk::RegionOfInterestImageFilter<VolumeType, VolumeType>::New();
+  crop->SetInput(source->GetOutput());
+  crop->SetRegionOfInterest(region);
+  auto segmentation = SegmentationType::New();
+  segmentation->SetInput(crop->GetOutput());
+  auto surface = SurfaceType::New();
+  surface->SetInput(segmentation->GetOutput());
+  surface->SetIntensityImage(crop->GetOutput());
+  surface->Update();
+  std::string warnings;
+  for (const std::string & warning : surface->GetWarnings())
+  {
+    warnings += warning + "\n";
+  }
+  PhantomResult result;
+  result.Mesh = surface->GetSheetMesh();
+  result.Geometry = source->GetGeometry();
+  result.Voxel = std::min(source->GetVoxelSize(), source->GetSliceSpacing());
+  result.Method = surface->GetReport().Method;
+  const Figures figures = Measure("standard cut by the field of view", result);
+  EXPECT_NE(warnings.find("cut by the field of view"), std::string::npos) << warnings;
+  EXPECT_EQ(result.Method, itk::SheetSurfaceMethodEnum::Roll);
+  EXPECT_LE(figures.MeanDistance, 0.5);
+  EXPECT_EQ(figures.LayerJumps, 0u);
+  // An eighth of the box's width is out of view; the outer turns alone are more than a third
+  // of the sheet.
+  EXPECT_GE(figures.Coverage, 0.8);
 }
 
 TEST(SheetMidSurfaceMeshFilter, TiltedRollIsResampledAlongItsAxis)
