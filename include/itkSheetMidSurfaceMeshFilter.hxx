@@ -20,6 +20,7 @@
 
 #include "itkConnectedComponentImageFilter.h"
 #include "itkGradientRecursiveGaussianImageFilter.h"
+#include "itkLabelStatisticsImageFilter.h"
 #include "itkNearestNeighborInterpolateImageFunction.h"
 #include "itkParallelImageRows.h"
 #include "itkRelabelComponentImageFilter.h"
@@ -29,7 +30,6 @@
 #include "itkSmoothingRecursiveGaussianImageFilter.h"
 
 #include <array>
-#include <climits>
 #include <numeric>
 #include <sstream>
 
@@ -93,43 +93,20 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   // outer turns, which wrap around it: pieces whose boxes overlap the largest piece's are
   // meshed with it when they trace as one roll (the roll tracer carries its turns through
   // the part out of view). Otherwise, and for pieces apart from it, only the largest.
-  const SizeValueType              objects = relabel->GetNumberOfObjects();
-  std::vector<std::array<long, 6>> boxes(objects, { LONG_MAX, LONG_MAX, LONG_MAX, LONG_MIN, LONG_MIN, LONG_MIN });
-  {
-    const auto            size = region.GetSize();
-    const SizeValueType * label = labels->GetBufferPointer();
-    for (size_t k = 0; k < size[2]; ++k)
-    {
-      for (size_t j = 0; j < size[1]; ++j)
-      {
-        for (size_t i = 0; i < size[0]; ++i, ++label)
-        {
-          if (*label != 0)
-          {
-            auto &     box = boxes[*label - 1];
-            const long index[3] = { static_cast<long>(i), static_cast<long>(j), static_cast<long>(k) };
-            for (unsigned d = 0; d < 3; ++d)
-            {
-              box[d] = std::min(box[d], index[d]);
-              box[3 + d] = std::max(box[3 + d], index[d]);
-            }
-          }
-        }
-      }
-    }
-  }
+  const SizeValueType objects = relabel->GetNumberOfObjects();
+  // The pieces' bounding boxes (the labels serve as their own values).
+  auto pieces = LabelStatisticsImageFilter<LabelImageType, LabelImageType>::New();
+  pieces->SetInput(labels);
+  pieces->SetLabelInput(labels);
+  pieces->Update();
+  const auto           largestBox = pieces->GetRegion(1);
   std::vector<uint8_t> withLargest(objects + 1, 0);
-  withLargest[1] = 1;
-  SizeValueType overlapping = 1;
-  for (SizeValueType l = 2; l <= objects; ++l)
+  SizeValueType        overlapping = 0;
+  for (SizeValueType l = 1; l <= objects; ++l)
   {
-    bool overlaps = true;
-    for (unsigned d = 0; d < 3; ++d)
-    {
-      overlaps = overlaps && boxes[l - 1][d] <= boxes[0][3 + d] && boxes[0][d] <= boxes[l - 1][3 + d];
-    }
-    withLargest[l] = overlaps ? 1 : 0;
-    overlapping += overlaps ? 1 : 0;
+    auto box = pieces->GetRegion(l);
+    withLargest[l] = box.Crop(largestBox) ? 1 : 0;
+    overlapping += withLargest[l];
   }
   const std::vector<uint8_t> largestOnly{ 0, 1 };
   auto                       meshPieces = [&](const std::vector<uint8_t> &       keep,
