@@ -27,6 +27,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <vector>
 
 namespace itk {
@@ -251,6 +252,72 @@ detail::CombineLayers(const LayerStackType *                stack,
   }
   const float *       in = stack->GetBufferPointer();
   const SizeValueType plane = size[0] * size[1];
+  // The largest or smallest sample (the usual filters) whole rows at a time, each layer's row
+  // read in turn, the same values as the pixel-by-pixel combination below.
+  const bool extreme = filter == TextureLayersEnums::Filter::Max || filter == TextureLayersEnums::Filter::Min;
+  const bool largest = filter == TextureLayersEnums::Filter::Max;
+  const auto columns = static_cast<SizeValueType>(size[0]);
+  if (extreme)
+  {
+    MultiThreaderBase::New()->ParallelizeArray(
+      0,
+      size[1],
+      [&](SizeValueType row) {
+        // Any non-finite sample makes a pixel's check NaN (v - v is 0 for finite v only).
+        std::vector<float>  extremumRow(columns), checkRow(columns);
+        std::vector<double> coreRow(columns);
+        float * __restrict extremum = extremumRow.data();
+        float * __restrict check = checkRow.data();
+        double * __restrict core = coreRow.data();
+        for (size_t c = 0; c < plans.size(); ++c)
+        {
+          const Plan &  plan = plans[c];
+          const float * first = in + plan.Index[0] * plane + row * columns;
+          for (SizeValueType x = 0; x < columns; ++x)
+          {
+            extremum[x] = first[x];
+            check[x] = first[x] - first[x];
+          }
+          for (size_t k = 1; k < plan.Index.size(); ++k)
+          {
+            const float * __restrict layer = in + plan.Index[k] * plane + row * columns;
+            if (largest)
+            {
+              for (SizeValueType x = 0; x < columns; ++x)
+              {
+                extremum[x] = extremum[x] < layer[x] ? layer[x] : extremum[x];
+                check[x] += layer[x] - layer[x];
+              }
+            }
+            else
+            {
+              for (SizeValueType x = 0; x < columns; ++x)
+              {
+                extremum[x] = layer[x] < extremum[x] ? layer[x] : extremum[x];
+                check[x] += layer[x] - layer[x];
+              }
+            }
+          }
+          std::fill(core, core + columns, 0.0);
+          for (const SizeValueType k : plan.Core)
+          {
+            const float * __restrict layer = in + plan.Index[k] * plane + row * columns;
+            for (SizeValueType x = 0; x < columns; ++x)
+            {
+              core[x] += layer[x];
+            }
+          }
+          const double coreCount = plan.Core.empty() ? 1.0 : static_cast<double>(plan.Core.size());
+          float * __restrict target = out[c] + row * columns;
+          for (SizeValueType x = 0; x < columns; ++x)
+          {
+            target[x] = check[x] == 0.0f ? static_cast<float>(extremum[x] - core[x] / coreCount) : NaN;
+          }
+        }
+      },
+      nullptr);
+    return textures;
+  }
   // Row by row in parallel, each pixel's samples read once for every combination.
   MultiThreaderBase::New()->ParallelizeArray(
     0,
@@ -433,7 +500,8 @@ LayerStackTexture::Smooth(const TextureType * texture, double sigma)
   };
   const std::vector<float> kx = kernel(0), ky = kernel(1);
   const long               rx = static_cast<long>(kx.size() / 2), ry = static_cast<long>(ky.size() / 2);
-  std::vector<float>       value(n), weight(n);
+  // Written whole by the first pass (left uninitialised: zeroing them costs as much as a tap).
+  const std::unique_ptr<float[]> value(new float[n]), weight(new float[n]);
   MultiThreaderBase::New()->ParallelizeArray(
     0,
     size[1],
@@ -448,8 +516,10 @@ LayerStackTexture::Smooth(const TextureType * texture, double sigma)
         v[x + rx] = ok ? line[x] : 0.0f;
         w[x + rx] = ok ? 1.0f : 0.0f;
       }
-      float * sv = &value[row * columns]; // zero, as allocated
+      float * sv = &value[row * columns];
       float * sw = &weight[row * columns];
+      std::fill(sv, sv + columns, 0.0f);
+      std::fill(sw, sw + columns, 0.0f);
       for (long r = 0; r <= 2 * rx; ++r)
       {
         const float   k = kx[r];
@@ -518,46 +588,55 @@ LayerStackTexture::Median(const TextureType * texture, double radius)
       // A 3 x 3 window away from the border and from pixels off the sheet: each column's
       // three values sorted once (shared by three windows), then the median of nine is the
       // median of (the largest of the lows, the median of the middles, the smallest of the
-      // highs).
-      const bool         threeByThree = half[0] == 1 && half[1] == 1 && y > 0 && y + 1 < static_cast<long>(size[1]);
-      std::vector<float> sorted(threeByThree ? 3 * size[0] : 0);
-      std::vector<char>  finiteColumn(threeByThree ? size[0] : 0, 0);
-      for (long c = 0; threeByThree && c < columns; ++c)
-      {
-        float a = in[(y - 1) * columns + c], b = in[y * columns + c], d = in[(y + 1) * columns + c];
-        finiteColumn[c] = std::isfinite(a) && std::isfinite(b) && std::isfinite(d);
-        if (a > b)
-        {
-          std::swap(a, b);
-        }
-        if (b > d)
-        {
-          std::swap(b, d);
-        }
-        if (a > b)
-        {
-          std::swap(a, b);
-        }
-        sorted[3 * c] = a;
-        sorted[3 * c + 1] = b;
-        sorted[3 * c + 2] = d;
-      }
+      // highs); whole rows at a time, by minima and maxima, then the other pixels one by one.
+      const bool threeByThree = half[0] == 1 && half[1] == 1 && y > 0 && y + 1 < static_cast<long>(size[1]);
       const auto median3 = [](float a, float b, float c) {
         return std::max(std::min(a, b), std::min(std::max(a, b), c));
       };
+      // A pixel is done here when its check is 0: its window's nine values are finite (v - v
+      // is 0 for finite v only, NaN otherwise).
+      std::vector<float> checkRow(columns, NaN);
+      if (threeByThree)
+      {
+        std::vector<float> lowRow(columns), middleRow(columns), highRow(columns);
+        float * __restrict low = lowRow.data();
+        float * __restrict middle = middleRow.data();
+        float * __restrict high = highRow.data();
+        float * __restrict check = checkRow.data();
+        const float * __restrict above = in + (y - 1) * columns;
+        const float * __restrict here = in + y * columns;
+        const float * __restrict below = in + (y + 1) * columns;
+        std::vector<float> columnCheckRow(columns);
+        float * __restrict columnCheck = columnCheckRow.data();
+        for (long c = 0; c < columns; ++c)
+        {
+          const float a = above[c], b = here[c], d = below[c];
+          columnCheck[c] = (a - a) + (b - b) + (d - d);
+          const float lo = std::min(a, b), hi = std::max(a, b);
+          const float mid = std::min(hi, d);
+          high[c] = std::max(hi, d);
+          low[c] = std::min(lo, mid);
+          middle[c] = std::max(lo, mid);
+        }
+        float * __restrict target = out + y * columns;
+        for (long x = 1; x + 1 < columns; ++x)
+        {
+          check[x] = columnCheck[x - 1] + columnCheck[x] + columnCheck[x + 1];
+          target[x] = median3(std::max(std::max(low[x - 1], low[x]), low[x + 1]),
+                              median3(middle[x - 1], middle[x], middle[x + 1]),
+                              std::min(std::min(high[x - 1], high[x]), high[x + 1]));
+        }
+      }
       for (long x = 0; x < columns; ++x)
       {
+        if (checkRow[x] == 0.0f)
+        {
+          continue;
+        }
         const float centre = in[y * size[0] + x];
         if (!std::isfinite(centre))
         {
           out[y * size[0] + x] = centre;
-          continue;
-        }
-        if (threeByThree && x > 0 && x + 1 < columns && finiteColumn[x - 1] && finiteColumn[x] && finiteColumn[x + 1])
-        {
-          const float * l = &sorted[3 * (x - 1)];
-          out[y * columns + x] =
-            median3(std::max({ l[0], l[3], l[6] }), median3(l[1], l[4], l[7]), std::min({ l[2], l[5], l[8] }));
           continue;
         }
         size_t count = 0;
@@ -706,13 +785,10 @@ LayerStackTexture::TrimBorder(const TextureType * texture, double width)
   finite->Allocate();
   const SizeValueType n = texture->GetBufferedRegion().GetNumberOfPixels();
   std::transform(in, in + n, finite->GetBufferPointer(), [](float v) { return std::isfinite(v) ? 1 : 0; });
-  const std::vector<float> inside = detail::DistanceInsideValidRegion(finite);
+  const std::vector<char> within = detail::WithinOfValidRegionEdge(finite, width);
   for (SizeValueType k = 0; k < n; ++k)
   {
-    if (inside[k] < width)
-    {
-      out[k] = NaN;
-    }
+    out[k] = within[k] ? NaN : out[k];
   }
   return result;
 }

@@ -17,9 +17,12 @@
  *=========================================================================*/
 #include "vuValidRegion.h"
 
+#include "itkMultiThreaderBase.h"
 #include "itkSignedMaurerDistanceMapImageFilter.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 namespace itk {
 namespace detail {
@@ -62,6 +65,81 @@ DistanceInsideValidRegion(const Image<unsigned char, 2> * valid)
     }
   }
   return inside;
+}
+
+std::vector<char>
+WithinOfValidRegionEdge(const Image<unsigned char, 2> * valid, double width)
+{
+  const auto            size = valid->GetBufferedRegion().GetSize();
+  const auto            columns = static_cast<long>(size[0]), rows = static_cast<long>(size[1]);
+  const double          sx = valid->GetSpacing()[0], sy = valid->GetSpacing()[1];
+  const float           halfPixel = 0.5f * static_cast<float>(std::min(sx, sy));
+  const unsigned char * in = valid->GetBufferPointer();
+  // A pixel is within when its distance to the nearest invalid centre is below
+  // width + half a pixel: only invalid pixels that near, and rows that near, matter.
+  const double reach = width + halfPixel;
+  const long   cap = static_cast<long>(std::ceil(reach / sx)) + 1;
+  const long   rowReach = static_cast<long>(std::ceil(reach / sy)) + 1;
+  // Along each row, the number of pixels to the nearest invalid one (outside the row's ends
+  // counts as invalid), capped where it no longer matters.
+  std::vector<int> along(size[0] * size[1]);
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[1],
+    [&](SizeValueType row) {
+      const unsigned char * line = in + row * columns;
+      int *                 h = &along[row * columns];
+      long                  last = -1;
+      for (long x = 0; x < columns; ++x)
+      {
+        last = line[x] != 0 ? last : x;
+        h[x] = static_cast<int>(std::min(cap, x - last));
+      }
+      long next = columns;
+      for (long x = columns - 1; x >= 0; --x)
+      {
+        next = line[x] != 0 ? next : x;
+        h[x] = std::min(h[x], static_cast<int>(std::min(cap, next - x)));
+      }
+    },
+    nullptr);
+  std::vector<char> within(size[0] * size[1]);
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[1],
+    [&](SizeValueType row) {
+      const auto          y = static_cast<long>(row);
+      std::vector<double> nearest(columns, std::numeric_limits<double>::infinity());
+      for (long dy = -rowReach; dy <= rowReach; ++dy)
+      {
+        const double across = (dy * sy) * (dy * sy);
+        if (y + dy < 0 || y + dy >= rows)
+        {
+          // The ring of invalid pixels around the image.
+          if (y + dy == -1 || y + dy == rows)
+          {
+            for (long x = 0; x < columns; ++x)
+            {
+              nearest[x] = std::min(nearest[x], across);
+            }
+          }
+          continue;
+        }
+        const int * h = &along[(y + dy) * columns];
+        for (long x = 0; x < columns; ++x)
+        {
+          const double a = h[x] * sx;
+          nearest[x] = std::min(nearest[x], a * a + across);
+        }
+      }
+      char * target = &within[y * columns];
+      for (long x = 0; x < columns; ++x)
+      {
+        target[x] = static_cast<float>(std::sqrt(nearest[x])) - halfPixel < width;
+      }
+    },
+    nullptr);
+  return within;
 }
 } // namespace detail
 } // namespace itk

@@ -31,6 +31,13 @@ namespace detail {
  * <= 0. Shared by LayerStackTexture::TrimBorder and TextureFidelityCalculator's border. */
 std::vector<float>
 DistanceInsideValidRegion(const Image<unsigned char, 2> * valid);
+
+/** Whether each pixel lies less than `width` (physical units, > 0) inside the edge of the
+ * valid region, as DistanceInsideValidRegion measures it (invalid pixels always do), found
+ * without a whole distance map: each row's distance to its nearest invalid pixel, then the
+ * nearest over the rows within `width`. */
+std::vector<char>
+WithinOfValidRegionEdge(const Image<unsigned char, 2> * valid, double width);
 } // namespace detail
 } // namespace itk
 

@@ -313,6 +313,96 @@ TEST(LayerStackTexture, TrimBorderRemovesRingsInsideTheSheetsEdge)
   EXPECT_THROW(LST::TrimBorder(texture, -1.0), itk::ExceptionObject);
 }
 
+TEST(LayerStackTexture, TrimBorderEqualsTheDistanceToTheNearestHole)
+{
+  // Random holes, rectangular pixels: a pixel is trimmed exactly when the nearest hole's or
+  // outside pixel's centre lies nearer than the width plus half the smaller pixel side.
+  std::mt19937                          random(11);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  auto texture = MakeTexture(41, 29, 1.0, [&](unsigned, unsigned) { return unit(random) < 0.03f ? NaN : 1.0f; });
+  TextureType::SpacingType spacing;
+  spacing[0] = 0.3;
+  spacing[1] = 0.45;
+  texture->SetSpacing(spacing);
+  for (const double width : { 0.2, 0.7, 1.33, 2.9 })
+  {
+    const auto trimmed = LST::TrimBorder(texture, width);
+    for (long y = 0; y < 29; ++y)
+    {
+      for (long x = 0; x < 41; ++x)
+      {
+        double nearest = std::numeric_limits<double>::infinity();
+        for (long v = -1; v <= 29; ++v)
+        {
+          for (long u = -1; u <= 41; ++u)
+          {
+            const bool outside = u < 0 || v < 0 || u > 40 || v > 28;
+            if (outside || std::isnan(At(texture, u, v)))
+            {
+              nearest = std::min(nearest, std::hypot((u - x) * 0.3, (v - y) * 0.45));
+            }
+          }
+        }
+        ASSERT_EQ(std::isnan(At(trimmed, x, y)), nearest - 0.15 < width)
+          << "width " << width << " at " << x << ", " << y << ", nearest hole " << nearest;
+      }
+    }
+  }
+}
+
+TEST(LayerStackTexture, CombineEqualsTheFilterOfEachPixelsLayers)
+{
+  // Random samples with holes: every filter, half and core gives, pixel by pixel, the
+  // layers' combination less the core's mean, or NaN where a layer of the half is NaN.
+  std::mt19937                          random(13);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const auto                            stack = MakeStack(23, 17, 7, [&](unsigned, unsigned, unsigned) {
+    const float v = unit(random);
+    return v < 0.02f ? NaN : 10.0f * v;
+  });
+  for (const Filter filter : { Filter::Max, Filter::Min, Filter::Mean, Filter::Median })
+  {
+    for (const Side side : { Side::Both, Side::Positive, Side::Negative })
+    {
+      for (const double core : { 0.0, 1.0 })
+      {
+        const auto               combined = LST::Combine(stack, 7, 1.0, 0.0, Side::Both, side, filter, 1.0, core);
+        const unsigned           count = side == Side::Both ? 7 : 4;
+        const itk::TextureLayers layers(count, 1.0, 0.0, side, filter, 1.0);
+        for (long y = 0; y < 17; ++y)
+        {
+          for (long x = 0; x < 23; ++x)
+          {
+            std::vector<float> samples;
+            double             coreSum = 0.0;
+            unsigned           coreCount = 0;
+            for (unsigned k = 0; k < count; ++k)
+            {
+              const long layer = side == Side::Both ? k : side == Side::Positive ? 3 + k : 3 - long(k);
+              samples.push_back(stack->GetPixel({ { x, y, layer } }));
+              if (std::abs(layers.GetOffsets()[k]) <= core + 1e-9)
+              {
+                coreSum += samples.back();
+                ++coreCount;
+              }
+            }
+            const bool  hole = std::any_of(samples.begin(), samples.end(), [](float v) { return std::isnan(v); });
+            const float value = At(combined, x, y);
+            if (hole)
+            {
+              ASSERT_TRUE(std::isnan(value)) << filter << " " << side << " core " << core << " at " << x << ", " << y;
+              continue;
+            }
+            const double coreMean = core > 0.0 ? coreSum / coreCount : 0.0;
+            ASSERT_EQ(value, static_cast<float>(layers.Combine(samples.data()) - coreMean))
+              << filter << " " << side << " core " << core << " at " << x << ", " << y;
+          }
+        }
+      }
+    }
+  }
+}
+
 TEST(LayerStackTexture, NoiseSpreadIsTheStandardDeviationOfTheBackground)
 {
   std::mt19937                    random(5);

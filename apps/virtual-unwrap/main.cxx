@@ -30,6 +30,9 @@
 #include <regex>
 
 #include <sys/resource.h>
+#if defined(__GLIBC__)
+#  include <malloc.h>
+#endif
 
 namespace {
 // ITK's exception text spans several lines (location, file, description): keep the
@@ -78,6 +81,13 @@ OutOfMemory()
 int
 main(int argc, char * argv[])
 {
+#if defined(__GLIBC__)
+  // Every stage allocates and frees image-sized buffers of a few MiB: keep freed memory up to
+  // 128 MiB for reuse instead of handing it back to the system and faulting it in again
+  // (buffers above 32 MiB, the scan and its masks, are still mapped and returned on their own).
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 128 << 20);
+#endif
   CLI::App app{ "virtual-unwrap: read a CT scan of a rolled or folded document, find the writing surface, "
                 "unroll and flatten it by mass-spring simulation, and render a flat, readable image.",
                 "virtual-unwrap" };
