@@ -153,6 +153,10 @@ protected:
   GenerateData() override;
 
 private:
+  /** Least size of a piece meshed with the largest when their boxes overlap (a roll cut by
+   * the field of view), as a fraction of the largest piece: the arc of a cut turn, not a
+   * speck of noise. */
+  static constexpr double CutArcFraction = 0.002;
   using SheetImageType = Image<uint8_t, 3>;
   using AxisType = Vector<double, 3>;
   static AxisType

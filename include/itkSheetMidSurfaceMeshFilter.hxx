@@ -100,12 +100,15 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   pieces->SetLabelInput(labels);
   pieces->Update();
   const auto           largestBox = pieces->GetRegion(1);
+  const auto &         pieceSizes = relabel->GetSizeOfObjectsInPixels();
   std::vector<uint8_t> withLargest(objects + 1, 0);
   SizeValueType        overlapping = 0;
   for (SizeValueType l = 1; l <= objects; ++l)
   {
-    auto box = pieces->GetRegion(l);
-    withLargest[l] = box.Crop(largestBox) ? 1 : 0;
+    // An arc of a cut turn, not a speck of noise within the roll's box.
+    auto       box = pieces->GetRegion(l);
+    const bool arc = static_cast<double>(pieceSizes[l - 1]) >= CutArcFraction * static_cast<double>(pieceSizes[0]);
+    withLargest[l] = arc && box.Crop(largestBox) ? 1 : 0;
     overlapping += withLargest[l];
   }
   const std::vector<uint8_t> largestOnly{ 0, 1 };
