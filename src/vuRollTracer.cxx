@@ -63,8 +63,6 @@ constexpr double PathsPreference = 0.02;
 constexpr long AloneRays = 8;
 // Voxels from the edge of the scan's data within which the intensities are not trusted.
 constexpr long DataMargin = 3;
-// Voxels from the edge of the scan's data within which a peak is not taken for a sheet.
-constexpr long EdgeMargin = 2;
 
 // Least-squares line y = intercept + slope x through the points added.
 struct LineFit
@@ -167,7 +165,7 @@ public:
   {}
 
   bool
-  Inside(double x, double y, long margin = DataMargin) const
+  Inside(double x, double y) const
   {
     const double u = x / m_SX, v = y / m_SY;
     if (!(u >= 0.0 && v >= 0.0 && u <= static_cast<double>(m_NX - 1) && v <= static_cast<double>(m_NY - 1)))
@@ -182,7 +180,7 @@ public:
     }
     const long i = std::lround(u), j = std::lround(v);
     for (const auto & [di, dj] :
-         { std::pair{ 0L, 0L }, { -margin, 0L }, { margin, 0L }, { 0L, -margin }, { 0L, margin } })
+         { std::pair{ 0L, 0L }, { -DataMargin, 0L }, { DataMargin, 0L }, { 0L, -DataMargin }, { 0L, DataMargin } })
     {
       const long a = i + di, b = j + dj;
       if (a >= 0 && b >= 0 && a < m_NX && b < m_NY && m_Data[b * m_NX + a] == 0)
@@ -364,7 +362,6 @@ public:
     if (markNoData && m_Volume.Data != nullptr)
     {
       polar.Known.assign(polar.Values.size(), 1);
-      polar.NearEdge.assign(polar.Values.size(), 0);
     }
     std::vector<ValueSlice> samplers;
     for (size_t k : slices)
@@ -390,7 +387,6 @@ public:
         if (!polar.Known.empty() && !samplers.front().Inside(x, y))
         {
           polar.Known[row + j] = 0;
-          polar.NearEdge[row + j] = !samplers.front().Inside(x, y, EdgeMargin);
         }
       }
     };
@@ -406,21 +402,7 @@ public:
     result.Rays.resize(static_cast<size_t>(m_Frame.Rays));
     ForEachIndex(m_Frame.Rays, parallel, [&](long a) {
       const auto begin = polar.Values.begin() + a * polar.Samples;
-      auto &     list = result.Rays[static_cast<size_t>(a)];
-      list = Peaks(std::vector<double>(begin, begin + polar.Samples));
-      if (!polar.Known.empty())
-      {
-        // Near the edge of the scan's data (a field of view cutting the roll) the smoothed
-        // sheet's ends and the filled-in values make peaks that no sheet makes there: not
-        // observations (the follower carries a turn through, as out of the field of view).
-        const auto known = [&](double r) {
-          const auto j = std::lround(r / polar.Dr);
-          return j >= 0 && j < polar.Samples && polar.NearEdge[static_cast<size_t>(a * polar.Samples + j)] == 0;
-        };
-        list.erase(std::remove_if(
-                     list.begin(), list.end(), [&](const Crossing & c) { return !known(c.Inner) || !known(c.Outer); }),
-                   list.end());
-      }
+      result.Rays[static_cast<size_t>(a)] = Peaks(std::vector<double>(begin, begin + polar.Samples));
     });
     return result;
   }
@@ -724,9 +706,7 @@ public:
       }
       const double x = centre[0] + predicted * std::cos(static_cast<double>(m) * m_Frame.Step);
       const double y = centre[1] + predicted * std::sin(static_cast<double>(m) * m_Frame.Step);
-      // Out of the data, or so near its edge that the sheet's crossing may have been left out
-      // (FindCrossings) while the prediction is a voxel or two off it.
-      const bool outside = !slice.Inside(x, y, DataMargin + EdgeMargin);
+      const bool   outside = !slice.Inside(x, y);
       // No material lies beyond the frame's reach within the scan's data; outside it (a roll
       // cut by the field of view) the turn is carried on, as below.
       if (predicted > m_Frame.RMax && !outside)
@@ -1670,7 +1650,7 @@ TraceRoll(const SheetVolumeView &             volume,
       MultiThreaderBase::New()->ParallelizeArray(
         0,
         slices.size(),
-        [&](SizeValueType i) { found[i] = tracer.FindCrossings(tracer.Sample(slices[i], { slices[i] }, true)); },
+        [&](SizeValueType i) { found[i] = tracer.FindCrossings(tracer.Sample(slices[i], { slices[i] }, false)); },
         nullptr);
       for (size_t i = 0; i < slices.size(); ++i)
       {

@@ -38,8 +38,6 @@ struct PolarSlice
   /** Zero where the scan holds no data (beyond a field of view that cuts the roll); empty
    * when it holds data everywhere. */
   std::vector<char> Known;
-  /** Non-zero within a voxel or so of where the scan holds no data (empty with Known). */
-  std::vector<char> NearEdge;
 
   /** The intensity at angular index m, sample j; NaN where the scan holds no data. */
   double
