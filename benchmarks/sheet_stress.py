@@ -1381,6 +1381,8 @@ def score_scan(scan_dir, keep="failures", overlay=True):
     row.update({k: outcome[k] for k in ("tool_exit", "tool_error", "seconds_tool")})
     code = outcome["tool_exit"]
     out = os.path.join(scan_dir, "unwrap")
+    if not os.path.exists(os.path.join(out, "surface.obj")) and os.path.isdir(os.path.join(out, "sheet-01")):
+        out = os.path.join(out, "sheet-01")  # several sheets found: the largest is the roll
     surface = os.path.join(out, "surface.obj")
     row["crash"] = bool(code not in (0, 1) or (code == 0 and not os.path.exists(surface)))
     if code == 0 and os.path.exists(os.path.join(out, "segment.json")):

@@ -35,8 +35,9 @@ namespace itk {
  * documentation describes the algorithm, the grid and the normals.
  *
  * The mask's face-connected components are labelled; the largest is meshed (one sheet =
- * one connected mesh) and, when there are several, a warning says so. Only the bounding
- * box of that component (plus two voxels) is read. The roll axis is estimated as the
+ * one connected mesh) and, when there are several, a warning says so; with EverySheet on,
+ * every piece whose area reaches MinimumSheetArea is meshed as a sheet of its own (see
+ * below). Only the bounding box of a sheet's component (plus two voxels) is read. The roll axis is estimated as the
  * direction of least gradient energy over the sheet (the smallest eigenvector of the
  * structure tensor of the lightly smoothed intensities, or of the mask), since a rolled
  * sheet does not change along its axis; for a sheet without such a direction (flat or
@@ -56,6 +57,16 @@ namespace itk {
  * >= 0), SpacingAlongAxis (mm, 0 = automatic, >= 0), ChordErrorFraction (0.1, in (0, 1]),
  * AxisTiltTolerance (degrees, 2, >= 0; the slices must still cut the roll, so tilts up to
  * about 45 degrees are handled).
+ * Every sheet (EverySheet, off by default): the pieces are taken from the largest down.
+ * Each becomes a sheet, together with the smaller pieces in its box that trace with it as
+ * one roll (the arcs of its turns cut by the field of view); a piece whose area (voxels
+ * times voxel volume over the first sheet's measured thickness) is below
+ * MinimumSheetArea (mm^2; 0: automatic, 1 % of the first sheet's area and at least 400
+ * in-plane voxels) is counted as too small, one that cannot be traced is dropped with the
+ * reason (GetDroppedPieces()). Sheets are numbered from 0 by size; sheet i is output i
+ * (GetOutput(i)), GetSheetMesh(i), GetSheetReport(i) and GetSheetSummary(i) (voxels,
+ * area, physical bounds, pieces, confidence). Output 0 and GetSheetMesh() are the first,
+ * largest sheet either way. FindSheetNearestTo(point) picks a sheet by a seed point.
  * Outputs: the itk::Mesh (triangles; grid rows, columns and per-point (row, column) in its
  * meta-data dictionary, keys of itkSheetMeshAdaptor.h), GetSheetMesh() (the same as plain
  * arrays, GridIndex set), GetReport() (method used, spacings, thickness, smallest radius
@@ -66,6 +77,38 @@ namespace itk {
  *
  * \ingroup VirtualUnwrapping
  */
+/** One sheet found by SheetMidSurfaceMeshFilter with EverySheet on: its size, where it
+ * lies (physical bounds of its mesh, mm) and how sure the trace is (the share of its
+ * slices traced, not interpolated, times their mean confirmed fraction). */
+struct VirtualUnwrapping_EXPORT SheetSummary
+{
+  size_t Voxels{ 0 };
+  /** Voxels times voxel volume over the sheet's measured thickness (mm^2). */
+  double Area{ 0.0 };
+  double BoundsMinimum[3]{ 0.0, 0.0, 0.0 };
+  double BoundsMaximum[3]{ 0.0, 0.0, 0.0 };
+  /** Face-connected pieces of the mask meshed as this sheet (more than one: a roll cut by
+   * the field of view). */
+  size_t Pieces{ 1 };
+  double Confidence{ 0.0 };
+};
+
+/** The pieces of the mask that SheetMidSurfaceMeshFilter did not mesh, and why. */
+struct VirtualUnwrapping_EXPORT DroppedSheetPieces
+{
+  /** Below MinimumSheetArea: counted, not meshed. */
+  size_t TooSmall{ 0 };
+  size_t TooSmallVoxels{ 0 };
+  /** Large enough but not traceable: voxels, area (mm^2) and the extractor's reason. */
+  struct Untraceable
+  {
+    size_t      Voxels;
+    double      Area;
+    std::string Reason;
+  };
+  std::vector<Untraceable> NotTraced;
+};
+
 template <typename TMaskImage, typename TOutputMesh = Mesh<float, 3>>
 class ITK_TEMPLATE_EXPORT SheetMidSurfaceMeshFilter : public ImageToMeshFilter<TMaskImage, TOutputMesh>
 {
@@ -99,11 +142,65 @@ public:
   itkGetConstMacro(ChordErrorFraction, double);
   itkSetMacro(AxisTiltTolerance, double);
   itkGetConstMacro(AxisTiltTolerance, double);
+  itkSetMacro(EverySheet, bool);
+  itkGetConstMacro(EverySheet, bool);
+  itkBooleanMacro(EverySheet);
+  itkSetClampMacro(MinimumSheetArea, double, 0.0, NumericTraits<double>::max());
+  itkGetConstMacro(MinimumSheetArea, double);
+
+  /** Output 0: the first (largest) sheet's mesh; output i: sheet i's. */
+  OutputMeshType *
+  GetOutput()
+  {
+    return Superclass::GetOutput();
+  }
+  OutputMeshType *
+  GetOutput(unsigned int sheet)
+  {
+    return dynamic_cast<OutputMeshType *>(this->ProcessObject::GetOutput(sheet));
+  }
+
+  /** Sheets meshed by the last Update(): 1 unless EverySheet is on. */
+  unsigned int
+  GetNumberOfSheets() const
+  {
+    return static_cast<unsigned int>(m_Sheets.size());
+  }
+  const SheetMesh &
+  GetSheetMesh(unsigned int sheet) const
+  {
+    return m_Sheets.at(sheet).Mesh;
+  }
+  const SheetMidSurfaceReport &
+  GetSheetReport(unsigned int sheet) const
+  {
+    return m_Sheets.at(sheet).Report;
+  }
+  const SheetSummary &
+  GetSheetSummary(unsigned int sheet) const
+  {
+    return m_Sheets.at(sheet).Summary;
+  }
+  const DroppedSheetPieces &
+  GetDroppedPieces() const
+  {
+    return m_Dropped;
+  }
+  /** The minimum sheet area applied by the last Update() (mm^2). */
+  double
+  GetMinimumSheetAreaUsed() const
+  {
+    return m_MinimumSheetAreaUsed;
+  }
+  /** The sheet with a mesh point nearest to a physical point (a seed point picking one
+   * sheet of several); throws when there is no sheet. */
+  unsigned int
+  FindSheetNearestTo(const typename MaskImageType::PointType & point) const;
 
   const SheetMesh &
   GetSheetMesh() const
   {
-    return m_SheetMesh;
+    return m_Sheets.empty() ? m_Empty.Mesh : m_Sheets.front().Mesh;
   }
   const SheetMidSurfaceReport &
   GetReport() const
@@ -157,6 +254,16 @@ private:
    * the field of view), as a fraction of the largest piece: the arc of a cut turn, not a
    * speck of noise. */
   static constexpr double CutArcFraction = 0.002;
+  /** Automatic minimum sheet area: this fraction of the first sheet's area, and at least
+   * this many in-plane voxels. */
+  static constexpr double AutomaticMinimumAreaFraction = 0.01;
+  static constexpr double AutomaticMinimumAreaVoxels = 400.0;
+  struct Sheet
+  {
+    SheetMesh             Mesh;
+    SheetMidSurfaceReport Report;
+    SheetSummary          Summary;
+  };
   using SheetImageType = Image<uint8_t, 3>;
   using AxisType = Vector<double, 3>;
   static AxisType
@@ -171,6 +278,19 @@ private:
                     typename IntensityImageType::Pointer & sheetIntensity,
                     typename SheetImageType::Pointer &     sheetData,
                     std::vector<std::string> &             warnings) const;
+  static void
+  ToPhysicalFrame(const typename SheetImageType::PointType &     origin,
+                  const typename SheetImageType::DirectionType & direction,
+                  SheetMesh &                                    sheet);
+  static void
+  Summarise(Sheet & sheet, double area);
+  /** Whether every piece of the group has at least PieceOnMeshFraction of its voxels within
+   * PieceOnMeshReach voxels of a point of the mesh (physical frame). */
+  template <typename TLabelImage>
+  static bool
+  PiecesOnMesh(const TLabelImage * labels, const std::vector<uint8_t> & group, const SheetMesh & mesh);
+  static constexpr long   PieceOnMeshReach = 2;
+  static constexpr double PieceOnMeshFraction = 0.5;
   /** Smooths the intensities of a noisy scan for tracing (SheetIntensityLevels::DenoisingSigma
    * across the sheet, twice that along the roll axis); a clean scan is left as it is. */
   void
@@ -183,7 +303,12 @@ private:
   double                 m_SpacingAlongAxis{ 0.0 };
   double                 m_ChordErrorFraction{ 0.1 };
   double                 m_AxisTiltTolerance{ 2.0 };
-  SheetMesh              m_SheetMesh;
+  bool                   m_EverySheet{ false };
+  double                 m_MinimumSheetArea{ 0.0 };
+  double                 m_MinimumSheetAreaUsed{ 0.0 };
+  std::vector<Sheet>     m_Sheets;
+  Sheet                  m_Empty;
+  DroppedSheetPieces     m_Dropped;
   SheetMidSurfaceReport  m_Report;
 };
 } // end namespace itk

@@ -29,7 +29,9 @@
 #include "itkSheetMidSurfaceMeshFilter.h"
 #include "itkSmoothingRecursiveGaussianImageFilter.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <numeric>
 #include <sstream>
 
@@ -90,31 +92,21 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     itkExceptionMacro(<< "the mask is empty");
   }
   // A roll cut by the field of view falls apart into its inner part and the arcs of its
-  // outer turns, which wrap around it: pieces whose boxes overlap the largest piece's are
+  // outer turns, which wrap around it: smaller pieces whose boxes overlap a sheet's box are
   // meshed with it when they trace as one roll (the roll tracer carries its turns through
-  // the part out of view). Otherwise, and for pieces apart from it, only the largest.
+  // the part out of view). Otherwise, and for pieces apart from it, the piece alone.
   const SizeValueType objects = relabel->GetNumberOfObjects();
   // The pieces' bounding boxes (the labels serve as their own values).
   auto pieces = LabelStatisticsImageFilter<LabelImageType, LabelImageType>::New();
   pieces->SetInput(labels);
   pieces->SetLabelInput(labels);
   pieces->Update();
-  const auto           largestBox = pieces->GetRegion(1);
-  const auto &         pieceSizes = relabel->GetSizeOfObjectsInPixels();
-  std::vector<uint8_t> withLargest(objects + 1, 0);
-  SizeValueType        overlapping = 0;
-  for (SizeValueType l = 1; l <= objects; ++l)
-  {
-    // An arc of a cut turn, not a speck of noise within the roll's box.
-    auto       box = pieces->GetRegion(l);
-    const bool arc = static_cast<double>(pieceSizes[l - 1]) >= CutArcFraction * static_cast<double>(pieceSizes[0]);
-    withLargest[l] = arc && box.Crop(largestBox) ? 1 : 0;
-    overlapping += withLargest[l];
-  }
-  const std::vector<uint8_t> largestOnly{ 0, 1 };
-  auto                       meshPieces = [&](const std::vector<uint8_t> &       keep,
-                        std::vector<std::string> &         warnings,
-                        typename SheetImageType::Pointer & sheetMask) {
+  const auto & pieceSizes = relabel->GetSizeOfObjectsInPixels();
+  const auto & spacing = mask->GetSpacing();
+  const double voxelVolume = spacing[0] * spacing[1] * spacing[2];
+  // Pieces meshed as part of a sheet, dropped or counted as too small.
+  std::vector<uint8_t> done(objects + 1, 0);
+  auto                 meshPieces = [&](const std::vector<uint8_t> & keep, std::vector<std::string> & warnings) {
     auto kept = [&keep](SizeValueType label) { return label < keep.size() && keep[label] != 0; };
     // Read only the bounding box of the sheet, plus two voxels.
     const typename MaskImageType::RegionType box = BoundingRegionWhere(labels, kept, 2);
@@ -124,7 +116,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     boxRegion.SetSize(box.GetSize());
     typename SheetImageType::PointType boxOrigin;
     mask->TransformIndexToPhysicalPoint(box.GetIndex(), boxOrigin);
-    sheetMask = SheetImageType::New();
+    typename SheetImageType::Pointer sheetMask = SheetImageType::New();
     sheetMask->SetRegions(boxRegion);
     sheetMask->SetOrigin(boxOrigin);
     sheetMask->SetSpacing(mask->GetSpacing());
@@ -181,64 +173,182 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     parameters.SpacingAlongAxis = m_SpacingAlongAxis;
     parameters.ChordErrorFraction = m_ChordErrorFraction;
     extractor.SetParameters(parameters);
-    extractor.SetProgressCallback([this](double fraction) {
-      this->UpdateProgress(static_cast<float>(0.1 + 0.9 * fraction));
+    const double progressFrom = 0.1 + 0.9 * static_cast<double>(m_Sheets.size()) / (m_EverySheet ? 4.0 : 1.0);
+    extractor.SetProgressCallback([this, progressFrom](double fraction) {
+      const double span = m_EverySheet ? 0.9 / 4.0 : 0.9;
+      this->UpdateProgress(static_cast<float>(std::min(0.99, progressFrom + span * fraction)));
       return !this->GetAbortGenerateData();
     });
-    SheetMesh sheet = extractor.Extract(view);
-    m_Report = extractor.GetReport();
+    Sheet sheet;
+    sheet.Mesh = extractor.Extract(view);
+    sheet.Report = extractor.GetReport();
+    // From the (possibly resampled) box's scaled voxel frame to the physical frame.
+    ToPhysicalFrame(sheetMask->GetOrigin(), sheetMask->GetDirection(), sheet.Mesh);
     return sheet;
   };
-  std::vector<std::string>         warnings;
-  typename SheetImageType::Pointer sheetMask;
-  SheetMesh                        sheet;
-  SizeValueType                    meshed = 1;
-  if (overlapping > 1 && m_Method != SheetSurfaceMethodEnum::General)
+
+  // The sheet made from a piece: with the smaller pieces in its box that trace with it as
+  // one roll, or alone.
+  auto meshSheetFrom = [&](SizeValueType first, std::vector<std::string> & warnings) {
+    auto                 firstBox = pieces->GetRegion(first);
+    std::vector<uint8_t> group(objects + 1, 0);
+    group[first] = 1;
+    SizeValueType grouped = 1;
+    for (SizeValueType l = first + 1; l <= objects; ++l)
+    {
+      // An arc of a cut turn, not a speck of noise within the roll's box.
+      auto       box = pieces->GetRegion(l);
+      const bool arc =
+        static_cast<double>(pieceSizes[l - 1]) >= CutArcFraction * static_cast<double>(pieceSizes[first - 1]);
+      group[l] = done[l] == 0 && arc && box.Crop(firstBox) ? 1 : 0;
+      grouped += group[l];
+    }
+    if (grouped > 1 && m_Method != SheetSurfaceMethodEnum::General)
+    {
+      try
+      {
+        std::vector<std::string> groupWarnings;
+        Sheet                    sheet = meshPieces(group, groupWarnings);
+        // Every piece meshed with it must lie on the roll's mesh: a loose fragment in the
+        // roll's box is a sheet of its own.
+        if (sheet.Report.Method == SheetSurfaceMethodEnum::Roll && PiecesOnMesh(labels, group, sheet.Mesh))
+        {
+          warnings.insert(warnings.end(), groupWarnings.begin(), groupWarnings.end());
+          sheet.Summary.Pieces = grouped;
+          for (SizeValueType l = first; l <= objects; ++l)
+          {
+            done[l] |= group[l];
+            sheet.Summary.Voxels += group[l] != 0 ? pieceSizes[l - 1] : 0;
+          }
+          return sheet;
+        }
+      }
+      catch (const ExceptionObject &)
+      {
+        if (this->GetAbortGenerateData())
+        {
+          throw;
+        }
+      }
+    }
+    std::vector<uint8_t> alone(first + 1, 0);
+    alone[first] = 1;
+    done[first] = 1;
+    Sheet sheet = meshPieces(alone, warnings);
+    sheet.Summary.Voxels = pieceSizes[first - 1];
+    return sheet;
+  };
+
+  m_Sheets.clear();
+  m_Dropped = DroppedSheetPieces{};
+  std::vector<std::string> warnings;
+  m_Sheets.push_back(meshSheetFrom(1, warnings));
+  const double thickness = std::max(m_Sheets.front().Report.SheetThickness, std::cbrt(voxelVolume));
+  auto         areaOf = [&](SizeValueType voxels) { return static_cast<double>(voxels) * voxelVolume / thickness; };
+  m_MinimumSheetAreaUsed = m_MinimumSheetArea > 0.0
+                             ? m_MinimumSheetArea
+                             : std::max(AutomaticMinimumAreaFraction * areaOf(m_Sheets.front().Summary.Voxels),
+                                        AutomaticMinimumAreaVoxels * spacing[0] * spacing[1]);
+  if ((m_EverySheet || m_MinimumSheetArea > 0.0) && areaOf(m_Sheets.front().Summary.Voxels) < m_MinimumSheetAreaUsed)
   {
+    const double largest = areaOf(m_Sheets.front().Summary.Voxels);
+    m_Sheets.clear();
+    itkExceptionMacro(<< "no sheet: the largest piece of material covers " << largest
+                      << " mm^2, less than the minimum sheet area of " << m_MinimumSheetAreaUsed << " mm^2");
+  }
+  for (SizeValueType l = 2; m_EverySheet && l <= objects; ++l)
+  {
+    if (done[l] != 0)
+    {
+      continue;
+    }
+    if (areaOf(pieceSizes[l - 1]) < m_MinimumSheetAreaUsed)
+    {
+      done[l] = 1;
+      ++m_Dropped.TooSmall;
+      m_Dropped.TooSmallVoxels += pieceSizes[l - 1];
+      continue;
+    }
+    std::vector<std::string> sheetWarnings;
     try
     {
-      sheet = meshPieces(withLargest, warnings, sheetMask);
-      meshed = m_Report.Method == SheetSurfaceMethodEnum::Roll ? overlapping : 1;
+      Sheet sheet = meshSheetFrom(l, sheetWarnings);
+      sheet.Report.Warnings.insert(sheet.Report.Warnings.begin(), sheetWarnings.begin(), sheetWarnings.end());
+      m_Sheets.push_back(std::move(sheet));
     }
-    catch (const ExceptionObject &)
+    catch (const ExceptionObject & e)
     {
       if (this->GetAbortGenerateData())
       {
         throw;
       }
+      done[l] = 1;
+      m_Dropped.NotTraced.push_back({ pieceSizes[l - 1], areaOf(pieceSizes[l - 1]), e.GetDescription() });
     }
   }
-  if (meshed == 1)
+  const SizeValueType meshedPieces = std::count(done.begin() + 1, done.end(), uint8_t{ 1 });
+  if (!m_EverySheet && objects > 1)
   {
-    warnings.clear();
-    sheet = meshPieces(largestOnly, warnings, sheetMask);
-  }
-  if (objects > 1)
-  {
-    const auto &       sizes = relabel->GetSizeOfObjectsInPixels();
-    std::ostringstream text;
+    const SizeValueType meshed = m_Sheets.front().Summary.Pieces;
+    std::ostringstream  text;
     text << "the mask holds " << objects << " disconnected pieces; ";
     if (meshed == 1)
     {
-      text << "only the largest (" << sizes[0];
+      text << "only the largest (" << pieceSizes[0];
     }
     else
     {
-      SizeValueType voxels = 0;
-      for (SizeValueType l = 1; l <= objects; ++l)
-      {
-        voxels += withLargest[l] != 0 ? sizes[l - 1] : 0;
-      }
-      text << "the largest and the " << meshed - 1 << " around it, cut by the field of view (" << voxels;
+      text << "the largest and the " << meshed - 1 << " around it, cut by the field of view ("
+           << m_Sheets.front().Summary.Voxels;
     }
-    text << " of " << std::accumulate(sizes.begin(), sizes.end(), SizeValueType{ 0 }) << " voxels) was meshed";
+    text << " of " << std::accumulate(pieceSizes.begin(), pieceSizes.end(), SizeValueType{ 0 })
+         << " voxels) was meshed";
     warnings.insert(warnings.begin(), text.str());
   }
-  m_Report.Warnings.insert(m_Report.Warnings.begin(), warnings.begin(), warnings.end());
+  else if (m_EverySheet && (m_Dropped.TooSmall > 0 || !m_Dropped.NotTraced.empty()))
+  {
+    std::ostringstream text;
+    text << m_Sheets.size() << " sheet(s) meshed from "
+         << meshedPieces - m_Dropped.TooSmall - m_Dropped.NotTraced.size() << " of " << objects << " pieces";
+    if (m_Dropped.TooSmall > 0)
+    {
+      text << "; " << m_Dropped.TooSmall << " piece(s) below the minimum sheet area of " << m_MinimumSheetAreaUsed
+           << " mm^2 ignored (" << m_Dropped.TooSmallVoxels << " voxels)";
+    }
+    if (!m_Dropped.NotTraced.empty())
+    {
+      text << "; " << m_Dropped.NotTraced.size() << " piece(s) could not be traced";
+    }
+    warnings.insert(warnings.begin(), text.str());
+  }
+  Sheet & first = m_Sheets.front();
+  first.Report.Warnings.insert(first.Report.Warnings.begin(), warnings.begin(), warnings.end());
+  m_Report = first.Report;
 
-  // From the (possibly resampled) box's scaled voxel frame to the physical frame.
-  const auto & direction = sheetMask->GetDirection();
-  const auto & origin = sheetMask->GetOrigin();
+  // The outputs: sheet i is output i, each built in place (a QuadEdgeMesh must not share
+  // its cells with a temporary mesh: it deletes them when it is destroyed).
+  this->SetNumberOfIndexedOutputs(static_cast<ProcessObject::DataObjectPointerArraySizeType>(m_Sheets.size()));
+  for (unsigned int i = 0; i < m_Sheets.size(); ++i)
+  {
+    Sheet & sheet = m_Sheets[i];
+    if (this->GetOutput(i) == nullptr)
+    {
+      this->SetNthOutput(i, this->MakeOutput(i));
+    }
+    SheetMeshIntoMesh(sheet.Mesh, this->GetOutput(i));
+    MarkMeshWhole(this->GetOutput(i));
+    Summarise(sheet, areaOf(sheet.Summary.Voxels));
+  }
+  this->UpdateProgress(1.0f);
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+void
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::ToPhysicalFrame(
+  const typename SheetImageType::PointType &     origin,
+  const typename SheetImageType::DirectionType & direction,
+  SheetMesh &                                    sheet)
+{
   for (size_t i = 0; i < sheet.GetNumberOfPoints(); ++i)
   {
     double q[3] = { sheet.Points[3 * i], sheet.Points[3 * i + 1], sheet.Points[3 * i + 2] };
@@ -254,13 +364,125 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
       std::swap(sheet.Triangles[3 * t + 1], sheet.Triangles[3 * t + 2]);
     }
   }
-  m_SheetMesh = std::move(sheet);
+}
 
-  // Built in place: a QuadEdgeMesh must not share its cells with a temporary mesh (it
-  // deletes them when it is destroyed).
-  SheetMeshIntoMesh(m_SheetMesh, this->GetOutput());
-  MarkMeshWhole(this->GetOutput());
-  this->UpdateProgress(1.0f);
+template <typename TMaskImage, typename TOutputMesh>
+template <typename TLabelImage>
+bool
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::PiecesOnMesh(const TLabelImage *          labels,
+                                                                 const std::vector<uint8_t> & group,
+                                                                 const SheetMesh &            mesh)
+{
+  // The voxels within PieceOnMeshReach voxels of a mesh point, then each piece's share of
+  // them.
+  const auto        region = labels->GetBufferedRegion();
+  const auto        size = region.GetSize();
+  std::vector<bool> nearMesh(region.GetNumberOfPixels(), false);
+  const long        reach = PieceOnMeshReach;
+  for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    typename TLabelImage::PointType p;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      p[d] = mesh.Points[3 * i + d];
+    }
+    typename TLabelImage::IndexType index;
+    labels->TransformPhysicalPointToIndex(p, index);
+    for (long z = std::max<long>(0, index[2] - reach); z <= std::min<long>(size[2] - 1, index[2] + reach); ++z)
+    {
+      for (long y = std::max<long>(0, index[1] - reach); y <= std::min<long>(size[1] - 1, index[1] + reach); ++y)
+      {
+        for (long x = std::max<long>(0, index[0] - reach); x <= std::min<long>(size[0] - 1, index[0] + reach); ++x)
+        {
+          nearMesh[(z * size[1] + y) * size[0] + x] = true;
+        }
+      }
+    }
+  }
+  std::vector<SizeValueType> on(group.size(), 0), all(group.size(), 0);
+  const SizeValueType *      label = labels->GetBufferPointer();
+  for (SizeValueType v = 0; v < nearMesh.size(); ++v)
+  {
+    if (label[v] < group.size() && group[label[v]] != 0)
+    {
+      ++all[label[v]];
+      on[label[v]] += nearMesh[v] ? 1 : 0;
+    }
+  }
+  for (size_t l = 0; l < group.size(); ++l)
+  {
+    if (all[l] > 0 && static_cast<double>(on[l]) < PieceOnMeshFraction * static_cast<double>(all[l]))
+    {
+      return false;
+    }
+  }
+  return true;
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+void
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::Summarise(Sheet & sheet, double area)
+{
+  SheetSummary & summary = sheet.Summary;
+  summary.Area = area;
+  const SheetMesh & mesh = sheet.Mesh;
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    summary.BoundsMinimum[d] = NumericTraits<double>::max();
+    summary.BoundsMaximum[d] = NumericTraits<double>::NonpositiveMin();
+  }
+  for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      summary.BoundsMinimum[d] = std::min(summary.BoundsMinimum[d], mesh.Points[3 * i + d]);
+      summary.BoundsMaximum[d] = std::max(summary.BoundsMaximum[d], mesh.Points[3 * i + d]);
+    }
+  }
+  const SheetMidSurfaceReport & report = sheet.Report;
+  const double                  traced = report.SlicesWithMaterial == 0 ? 0.0
+                                                                        : 1.0 - static_cast<double>(report.InterpolatedSlices) /
+                                                                 static_cast<double>(report.SlicesWithMaterial);
+  double                        confirmed = 0.0;
+  size_t                        counted = 0;
+  for (double c : report.SliceConfidence)
+  {
+    if (c > 0.0)
+    {
+      confirmed += c;
+      ++counted;
+    }
+  }
+  summary.Confidence = std::max(0.0, traced) * (counted > 0 ? confirmed / static_cast<double>(counted) : 1.0);
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+unsigned int
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::FindSheetNearestTo(
+  const typename MaskImageType::PointType & point) const
+{
+  if (m_Sheets.empty())
+  {
+    itkExceptionMacro(<< "no sheet has been meshed");
+  }
+  unsigned int nearest = 0;
+  double       best = NumericTraits<double>::max();
+  for (unsigned int i = 0; i < m_Sheets.size(); ++i)
+  {
+    const auto & points = m_Sheets[i].Mesh.Points;
+    for (size_t p = 0; p + 2 < points.size(); p += 3)
+    {
+      const double d = (points[p] - point[0]) * (points[p] - point[0]) +
+                       (points[p + 1] - point[1]) * (points[p + 1] - point[1]) +
+                       (points[p + 2] - point[2]) * (points[p + 2] - point[2]);
+      if (d < best)
+      {
+        best = d;
+        nearest = i;
+      }
+    }
+  }
+  return nearest;
 }
 
 template <typename TMaskImage, typename TOutputMesh>
@@ -629,8 +851,11 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::PrintSelf(std::ostream & os,
   os << indent << "SpacingAlongAxis: " << m_SpacingAlongAxis << std::endl;
   os << indent << "ChordErrorFraction: " << m_ChordErrorFraction << std::endl;
   os << indent << "AxisTiltTolerance: " << m_AxisTiltTolerance << std::endl;
-  os << indent << "SheetMesh: " << m_SheetMesh.GetNumberOfPoints() << " points, " << m_SheetMesh.GetNumberOfTriangles()
-     << " triangles" << std::endl;
+  os << indent << "EverySheet: " << m_EverySheet << std::endl;
+  os << indent << "MinimumSheetArea: " << m_MinimumSheetArea << std::endl;
+  os << indent << "Sheets: " << m_Sheets.size() << std::endl;
+  os << indent << "SheetMesh: " << this->GetSheetMesh().GetNumberOfPoints() << " points, "
+     << this->GetSheetMesh().GetNumberOfTriangles() << " triangles" << std::endl;
   os << indent << "Report: method " << ToString(m_Report.Method) << ", spacing " << m_Report.SpacingAlongSheet << " x "
      << m_Report.SpacingAlongAxis << " mm, thickness " << m_Report.SheetThickness << " mm, " << m_Report.Warnings.size()
      << " warning(s)" << std::endl;

@@ -32,6 +32,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <random>
 #include <string>
 
 namespace {
@@ -330,6 +331,104 @@ TEST(SheetMidSurfaceMeshFilter, FlatSheetWithAStrayPieceMeshesTheSheetAndWarns)
   filter->Update();
   EXPECT_NEAR(filter->GetReport().SpacingAlongSheet, 2.0, 0.3);
   EXPECT_NEAR(filter->GetReport().SpacingAlongAxis, 1.0, 0.15);
+}
+
+// Three flat sheets apart and a scatter of specks: with EverySheet each sheet is meshed on
+// its own (largest first, output i is sheet i), the specks are counted, not meshed, and a
+// seed point picks the sheet it lies on.
+TEST(SheetMidSurfaceMeshFilter, EverySheetIsMeshedAndSpecksAreCounted)
+{
+  auto mask = MakeMask(60, 14);
+  mask->SetSpacing(0.5);
+  AddFlatSheet(mask, 4, 55, 8);   // 52 voxels long
+  AddFlatSheet(mask, 4, 45, 20);  // 42
+  AddFlatSheet(mask, 10, 45, 32); // 36
+  std::mt19937 random(static_cast<unsigned>(std::random_device{}()));
+  unsigned     specks = 0;
+  for (int i = 0; i < 40; ++i)
+  {
+    // Single voxels and pairs in the air between and below the sheets.
+    const long x = 2 + static_cast<long>(random() % 56), y = 42 + static_cast<long>(random() % 16);
+    const long z = static_cast<long>(random() % 14);
+    if (mask->GetPixel({ { x, y, z } }) == 0 && mask->GetPixel({ { x - 1, y, z } }) == 0 &&
+        mask->GetPixel({ { x + 1, y, z } }) == 0 && mask->GetPixel({ { x, y - 1, z } }) == 0 &&
+        mask->GetPixel({ { x, y + 1, z } }) == 0 && mask->GetPixel({ { x, y, z - 1 } }) == 0 &&
+        mask->GetPixel({ { x, y, z + 1 } }) == 0)
+    {
+      mask->SetPixel({ { x, y, z } }, 1);
+      ++specks;
+    }
+  }
+  auto filter = SurfaceType::New();
+  filter->SetInput(mask);
+  filter->SetMethod(itk::SheetSurfaceMethodEnum::General);
+  filter->EverySheetOn();
+  filter->Update();
+  ASSERT_EQ(filter->GetNumberOfSheets(), 3u);
+  EXPECT_EQ(filter->GetDroppedPieces().TooSmall, specks);
+  EXPECT_TRUE(filter->GetDroppedPieces().NotTraced.empty());
+  const double rows[3] = { 9.0, 21.0, 33.0 };
+  const double lengths[3] = { 52.0, 42.0, 36.0 };
+  for (unsigned int sheet = 0; sheet < 3; ++sheet)
+  {
+    const itk::SheetMesh & mesh = filter->GetSheetMesh(sheet);
+    EXPECT_EQ(CountConnectedPieces(mesh), 1u);
+    EXPECT_EQ(filter->GetOutput(sheet)->GetNumberOfPoints(), mesh.GetNumberOfPoints());
+    for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+    {
+      ASSERT_NEAR(mesh.Points[3 * i + 1], 0.5 * rows[sheet], 0.05) << "sheet " << sheet << ", point " << i;
+    }
+    const itk::SheetSummary & summary = filter->GetSheetSummary(sheet);
+    EXPECT_EQ(summary.Voxels, static_cast<size_t>(3 * 14 * lengths[sheet]));
+    EXPECT_NEAR(summary.Area, 0.25 * 14 * lengths[sheet], 0.1 * 0.25 * 14 * lengths[sheet]);
+    EXPECT_NEAR(summary.BoundsMinimum[1], 0.5 * rows[sheet], 0.05);
+    EXPECT_GT(summary.Confidence, 0.9);
+    itk::Point<double, 3> seed;
+    seed[0] = 10.0;
+    seed[1] = 0.5 * rows[sheet] + 1.0;
+    seed[2] = 3.0;
+    EXPECT_EQ(filter->FindSheetNearestTo(seed), sheet);
+  }
+  EXPECT_EQ(filter->GetOutput()->GetNumberOfPoints(), filter->GetSheetMesh().GetNumberOfPoints());
+
+  // A minimum area above the smaller sheets keeps the largest; above every sheet: an error.
+  filter->SetMinimumSheetArea(0.25 * 14 * 50.0);
+  filter->Update();
+  EXPECT_EQ(filter->GetNumberOfSheets(), 1u);
+  EXPECT_EQ(filter->GetDroppedPieces().TooSmall, specks + 2);
+  filter->SetMinimumSheetArea(1e6);
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject);
+
+  // Without EverySheet: the largest only, as before.
+  filter->SetMinimumSheetArea(0.0);
+  filter->EverySheetOff();
+  filter->Update();
+  EXPECT_EQ(filter->GetNumberOfSheets(), 1u);
+  EXPECT_NEAR(filter->GetSheetMesh().Points[1], 4.5, 0.05);
+}
+
+// Specks alone (noise, no sheet): a clear error, not a mesh of a speck.
+TEST(SheetMidSurfaceMeshFilter, SpecksWithoutASheetAreRefused)
+{
+  auto         mask = MakeMask(60, 14);
+  std::mt19937 random(static_cast<unsigned>(std::random_device{}()));
+  for (int i = 0; i < 3000; ++i)
+  {
+    mask->SetPixel(
+      { { static_cast<long>(random() % 60), static_cast<long>(random() % 60), static_cast<long>(random() % 14) } }, 1);
+  }
+  auto filter = SurfaceType::New();
+  filter->SetInput(mask);
+  filter->EverySheetOn();
+  try
+  {
+    filter->Update();
+    FAIL() << "specks were meshed as " << filter->GetNumberOfSheets() << " sheet(s)";
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    EXPECT_NE(std::string(e.GetDescription()).size(), 0u);
+  }
 }
 
 TEST(SheetMidSurfaceMeshFilter, BadInputThrows)

@@ -53,6 +53,8 @@
 #include <future>
 #include <iostream>
 #include <limits>
+#include <numeric>
+#include <sstream>
 
 namespace vu {
 namespace {
@@ -78,6 +80,9 @@ struct UnwrapOptions
   std::string       Threshold{ "auto" };
   std::string       MeshSpacing{ "auto" };
   std::string       Method{ "auto" };
+  std::string       Sheet{ "all" };
+  std::string       SeedPoint;
+  std::string       MinimumSheetArea{ "auto" };
   unsigned int      Layers{ 0 };
   double            LayerSpacing{ 0.0 };
   std::string       Side{ "auto" };
@@ -401,6 +406,11 @@ struct CheckedOptions
   bool   FixedThreshold{ false };
   double Threshold{ 0.0 };
   double MeshSpacing[2]{ 0.0, 0.0 }; // 0: automatic
+  /** 0: every sheet; otherwise the sheet's number (from 1, largest first). */
+  unsigned int          Sheet{ 0 };
+  bool                  HasSeedPoint{ false };
+  itk::Point<double, 3> SeedPoint;
+  double                MinimumSheetArea{ 0.0 }; // 0: automatic
 };
 
 CheckedOptions
@@ -427,6 +437,37 @@ CheckUnwrapOptions(const UnwrapOptions & options)
   CheckedOptions checked;
   checked.FixedThreshold = ParseAutoOrNumber(options.Threshold, "--threshold", checked.Threshold);
   ParseMeshSpacing(options.MeshSpacing, checked.MeshSpacing);
+  if (options.Sheet != "all")
+  {
+    char *              end = nullptr;
+    const unsigned long n = std::strtoul(options.Sheet.c_str(), &end, 10);
+    if (options.Sheet.empty() || *end != '\0' || n == 0 || n > 9999 || options.Sheet[0] == '-')
+    {
+      throw UsageError("--sheet must be all or a sheet number from 1, got " + options.Sheet);
+    }
+    checked.Sheet = static_cast<unsigned int>(n);
+  }
+  if (!options.SeedPoint.empty())
+  {
+    if (checked.Sheet != 0)
+    {
+      throw UsageError("give --sheet or --seed-point, not both");
+    }
+    std::istringstream in(options.SeedPoint);
+    char               comma1 = 0, comma2 = 0;
+    in >> checked.SeedPoint[0] >> comma1 >> checked.SeedPoint[1] >> comma2 >> checked.SeedPoint[2];
+    if (!in || comma1 != ',' || comma2 != ',' || !(in >> std::ws).eof() || !std::isfinite(checked.SeedPoint[0]) ||
+        !std::isfinite(checked.SeedPoint[1]) || !std::isfinite(checked.SeedPoint[2]))
+    {
+      throw UsageError("--seed-point must be X,Y,Z in mm, got " + options.SeedPoint);
+    }
+    checked.HasSeedPoint = true;
+  }
+  if (ParseAutoOrNumber(options.MinimumSheetArea, "--minimum-sheet-area", checked.MinimumSheetArea) &&
+      !(checked.MinimumSheetArea > 0.0))
+  {
+    throw UsageError("--minimum-sheet-area must be auto or an area in mm^2 above 0");
+  }
   return checked;
 }
 
@@ -589,11 +630,14 @@ struct Results
   VolumeType::Pointer      Preview;
 };
 
+// The files of one sheet's results.
+const char * const OneSheetFiles[] = { "texture.png", "texture.tif", "layers.tif", "mask.png",   "surface.obj",
+                                       "surface.vtp", "flat.obj",    "flat.mtl",   "preview.png" };
+
 void
-WriteResults(const Results & results, const TexturerType & texturer, OutputStaging & output)
+WriteResults(const Results & results, const TexturerType & texturer, OutputStaging & output, const fs::path & staging)
 {
-  const fs::path staging = output.Path();
-  const auto     textureSize = results.Texture->GetLargestPossibleRegion().GetSize();
+  const auto textureSize = results.Texture->GetLargestPossibleRegion().GetSize();
   {
     // Images at their raw size (PNG and TIFF seldom exceed it), text meshes at ~60 bytes a
     // point and ~40 a triangle, the preview and the report.
@@ -668,52 +712,76 @@ LegibilityJson(const GroundTruth & truth, const TextureType * texture, const Tex
            { "truth_text", truth.Text } };
 }
 
-// Read, segment, mesh, unroll and flatten, texture, write; each stage one of the module's
-// filters, the results staged and moved into place when complete.
-void
-RunUnwrap(UnwrapOptions & options)
+using SurfaceFilterType = itk::SheetMidSurfaceMeshFilter<MaskType, MeshType>;
+using SegmentationType = itk::SheetSegmentationImageFilter<VolumeType, MaskType>;
+
+// What every sheet's unwrapping shares: the options, the scan, its segmentation, the truth
+// and the clock.
+struct SheetContext
 {
-  Progress                 progress(options.Quiet, options.JsonLog);
-  StageClock               clock(progress);
-  nlohmann::json           report;
-  std::vector<std::string> warnings;
-  const CheckedOptions     checked = CheckUnwrapOptions(options);
-  const GroundTruth        truth = ReadGroundTruth(options.GroundTruth);
+  const UnwrapOptions &    Options;
+  const Scan &             Input;
+  const SegmentationType & Segmentation;
+  const GroundTruth &      Truth;
+  Progress &               Display;
+  StageClock &             Clock;
+  OutputStaging &          Output;
+};
 
-  clock.Start("read", "reading " + options.Input);
-  const Scan scan = ReadScan(options, progress, report["input"], warnings);
-  clock.End("read");
+// A sheet that could not be flattened or textured (the others go on).
+class SheetFailure : public UsageError
+{
+public:
+  using UsageError::UsageError;
+};
 
-  clock.Start("segment", "segmenting the sheet");
-  auto segmentation = itk::SheetSegmentationImageFilter<VolumeType, MaskType>::New();
-  segmentation->SetInput(scan.Filled.Volume);
-  segmentation->SetAutomaticThreshold(!checked.FixedThreshold);
-  segmentation->SetThreshold(checked.Threshold);
-  progress.Observe(segmentation);
-  segmentation->Update();
-  clock.End("segment");
+// Unroll and flatten, texture, write and measure one sheet into `folder` (inside the
+// staging folder); returns its report.
+nlohmann::json
+UnwrapSheet(const SheetContext & context,
+            SurfaceFilterType &  surfaceFilter,
+            unsigned int         sheet,
+            const fs::path &     folder);
 
-  clock.Start("mesh", "meshing the sheet's mid-surface");
-  auto surfaceFilter = itk::SheetMidSurfaceMeshFilter<MaskType, MeshType>::New();
-  surfaceFilter->SetInput(segmentation->GetOutput());
-  surfaceFilter->SetIntensityImage(scan.Filled.Volume);
-  surfaceFilter->SetMethod(itk::SheetSurfaceMethodFromString(options.Method));
-  surfaceFilter->SetSpacingAlongSheet(checked.MeshSpacing[0]);
-  surfaceFilter->SetSpacingAlongAxis(checked.MeshSpacing[1]);
-  progress.Observe(surfaceFilter);
-  surfaceFilter->Update();
-  Results results;
-  results.Surface = surfaceFilter->GetSheetMesh();
-  const auto & meshReport = surfaceFilter->GetReport();
-  for (const auto & w : meshReport.Warnings)
+nlohmann::json
+UnwrapSheetOrFail(const SheetContext & context,
+                  SurfaceFilterType &  surfaceFilter,
+                  unsigned int         sheet,
+                  const fs::path &     folder)
+{
+  try
   {
-    warnings.push_back("mesh: " + w);
+    return UnwrapSheet(context, surfaceFilter, sheet, folder);
   }
-  clock.End("mesh");
+  catch (const SheetFailure &)
+  {
+    throw;
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    throw SheetFailure(e.GetDescription());
+  }
+}
 
-  clock.Start("flatten", "unrolling and flattening by mass-spring simulation");
+nlohmann::json
+UnwrapSheet(const SheetContext & context,
+            SurfaceFilterType &  surfaceFilter,
+            unsigned int         sheet,
+            const fs::path &     folder)
+{
+  const UnwrapOptions &              options = context.Options;
+  StageClock &                       clock = context.Clock;
+  Progress &                         progress = context.Display;
+  const itk::SheetMidSurfaceReport & meshReport = surfaceFilter.GetSheetReport(sheet);
+  MeshType *                         surfaceMesh = surfaceFilter.GetOutput(sheet);
+  const std::string                  which =
+    surfaceFilter.GetNumberOfSheets() > 1 ? "sheet " + std::to_string(sheet + 1) + ": " : std::string();
+  Results results;
+  results.Surface = surfaceFilter.GetSheetMesh(sheet);
+
+  clock.Start("flatten", which + "unrolling and flattening by mass-spring simulation");
   auto flattening = itk::MassSpringFlatteningMeshFilter<MeshType>::New();
-  flattening->SetInput(surfaceFilter->GetOutput());
+  flattening->SetInput(surfaceMesh);
   flattening->SetParameters(ResolveSimulationParameters(options.Simulation, results.Surface));
   flattening->AddObserver(itk::IterationEvent(), [&progress, &flattening](const itk::EventObject &) {
     progress.Tick(itk::ToString(flattening->GetCurrentPhase()), flattening->GetCurrentStep());
@@ -722,14 +790,14 @@ RunUnwrap(UnwrapOptions & options)
   results.Flat = itk::MeshToSheetMesh(flattening->GetOutput());
   clock.End("flatten");
 
-  clock.Start("texture", "sampling the layered texture");
-  auto texturer = MakeTexturer(options, meshReport.SheetThickness, segmentation->GetAppliedDenoisingSigma());
-  texturer->SetSurfaceMesh(surfaceFilter->GetOutput());
+  clock.Start("texture", which + "sampling the layered texture");
+  auto texturer = MakeTexturer(options, meshReport.SheetThickness, context.Segmentation.GetAppliedDenoisingSigma());
+  texturer->SetSurfaceMesh(surfaceMesh);
   texturer->SetFlatMesh(flattening->GetOutput());
-  texturer->SetVolume(scan.Volume);
+  texturer->SetVolume(context.Input.Volume);
   progress.Observe(texturer);
   texturer->Update();
-  results.VertexTexture = VertexTexture(surfaceFilter->GetOutput(), scan.Volume, *texturer);
+  results.VertexTexture = VertexTexture(surfaceMesh, context.Input.Volume, *texturer);
   results.Texture = FlipRows(texturer->GetOutput());
   results.Mask = FlipRows(texturer->GetMaskOutput());
   results.Layers = texturer->GetLayerStackOutput();
@@ -737,17 +805,22 @@ RunUnwrap(UnwrapOptions & options)
   // mid-surface meets the sheet's ends and edges and the samples mix in air.
   const double displayBorder = AutoOrLength(options.DisplayBorder, "--display-border", meshReport.SheetThickness);
   results.Display = itk::LayerStackTexture::TrimBorder(results.Texture, displayBorder);
-  results.Texture8 = EightBit(results.Display);
-  results.Preview = scan.Filled.Volume;
-  clock.End("texture");
-
-  // Into a staging folder beside the output, moved into place when complete: an error, a
-  // signal or a kill leaves the output as it was.
-  clock.Start("write", "writing " + options.Output);
-  OutputStaging output(fs::path(options.Output), OutputStaging::Kind::Folder);
   try
   {
-    WriteResults(results, *texturer, output);
+    results.Texture8 = EightBit(results.Display);
+  }
+  catch (const UsageError & e)
+  {
+    throw SheetFailure(e.what());
+  }
+  results.Preview = context.Input.Filled.Volume;
+  clock.End("texture");
+
+  clock.Start("write", "writing " + (folder == context.Output.Path() ? options.Output : folder.filename().string()));
+  fs::create_directories(folder);
+  try
+  {
+    WriteResults(results, *texturer, context.Output, folder);
   }
   catch (const std::bad_alloc &)
   {
@@ -766,9 +839,8 @@ RunUnwrap(UnwrapOptions & options)
 
   // Measures: distortion, and against the ground truth when there is one.
   const itk::SheetMesh & surface = results.Surface;
-  report["parameters"] = { { "threshold",
-                             { { "value", segmentation->GetThreshold() }, { "automatic", !checked.FixedThreshold } } },
-                           { "mesh",
+  nlohmann::json         report;
+  report["parameters"] = { { "mesh",
                              { { "method", itk::ToString(meshReport.Method) },
                                { "spacing_along_sheet_mm", meshReport.SpacingAlongSheet },
                                { "spacing_along_axis_mm", meshReport.SpacingAlongAxis } } },
@@ -787,17 +859,207 @@ RunUnwrap(UnwrapOptions & options)
   report["texture"] = { { "size", { textureSize[0], textureSize[1] } },
                         { "sheet_pixels", texturer->GetTextureFilter()->GetNumberOfSheetPixels() },
                         { "clamped_samples", texturer->GetTextureFilter()->GetNumberOfClampedSamples() } };
-  if (truth.Ink)
+  if (context.Truth.Ink)
   {
-    clock.Start("score", "comparing with the ground truth");
-    report["legibility"] = LegibilityJson(truth, results.Texture, results.Display);
+    clock.Start("score", which + "comparing with the ground truth");
+    report["legibility"] = LegibilityJson(context.Truth, results.Texture, results.Display);
     clock.End("score");
   }
+  return report;
+}
+
+// A sheet's entry in the list of sheets found: size, where it lies, how sure the trace is.
+nlohmann::json
+SheetEntryJson(const SurfaceFilterType & surfaceFilter, unsigned int sheet)
+{
+  const itk::SheetSummary & summary = surfaceFilter.GetSheetSummary(sheet);
+  return { { "sheet", sheet + 1 },
+           { "voxels", summary.Voxels },
+           { "area_mm2", summary.Area },
+           { "bounds_mm",
+             { { summary.BoundsMinimum[0], summary.BoundsMinimum[1], summary.BoundsMinimum[2] },
+               { summary.BoundsMaximum[0], summary.BoundsMaximum[1], summary.BoundsMaximum[2] } } },
+           { "pieces", summary.Pieces },
+           { "confidence", summary.Confidence },
+           { "method", itk::ToString(surfaceFilter.GetSheetReport(sheet).Method) } };
+}
+
+nlohmann::json
+DroppedJson(const SurfaceFilterType & surfaceFilter)
+{
+  const itk::DroppedSheetPieces & dropped = surfaceFilter.GetDroppedPieces();
+  nlohmann::json                  untraceable = nlohmann::json::array();
+  for (const auto & piece : dropped.NotTraced)
+  {
+    untraceable.push_back({ { "voxels", piece.Voxels }, { "area_mm2", piece.Area }, { "reason", piece.Reason } });
+  }
+  return { { "too_small",
+             { { "pieces", dropped.TooSmall },
+               { "voxels", dropped.TooSmallVoxels },
+               { "minimum_area_mm2", surfaceFilter.GetMinimumSheetAreaUsed() } } },
+           { "untraceable", untraceable } };
+}
+
+// An output folder written before with the other layout (one sheet's files, or a folder
+// per sheet) loses those files, so that nothing stale is mistaken for this run's results.
+void
+RemoveOtherLayout(const fs::path & output, bool folderPerSheet)
+{
+  std::error_code error;
+  if (!fs::is_directory(output, error))
+  {
+    return;
+  }
+  for (const auto & entry : fs::directory_iterator(output, error))
+  {
+    const std::string name = entry.path().filename().string();
+    const bool        sheetFolder = name.size() == 8 && name.rfind("sheet-", 0) == 0 &&
+                             std::isdigit(static_cast<unsigned char>(name[6])) &&
+                             std::isdigit(static_cast<unsigned char>(name[7])) && entry.is_directory();
+    const bool oneSheetFile =
+      std::find(std::begin(OneSheetFiles), std::end(OneSheetFiles), name) != std::end(OneSheetFiles);
+    if ((folderPerSheet && oneSheetFile) || sheetFolder)
+    {
+      fs::remove_all(entry.path(), error);
+    }
+  }
+}
+
+// The sheets to unwrap: every one found, or the one picked by number or seed point.
+std::vector<unsigned int>
+PickSheets(const CheckedOptions & checked, const SurfaceFilterType & surfaceFilter)
+{
+  const unsigned int found = surfaceFilter.GetNumberOfSheets();
+  if (checked.HasSeedPoint)
+  {
+    return { surfaceFilter.FindSheetNearestTo(checked.SeedPoint) };
+  }
+  if (checked.Sheet > found)
+  {
+    throw UsageError("--sheet " + std::to_string(checked.Sheet) + ": the scan holds " + std::to_string(found) +
+                     " sheet(s)");
+  }
+  if (checked.Sheet != 0)
+  {
+    return { checked.Sheet - 1 };
+  }
+  std::vector<unsigned int> all(found);
+  std::iota(all.begin(), all.end(), 0u);
+  return all;
+}
+
+// Read, segment, mesh every sheet, then unroll and flatten, texture and write each; each
+// stage one of the module's filters, the results staged and moved into place when complete.
+void
+RunUnwrap(UnwrapOptions & options)
+{
+  Progress                 progress(options.Quiet, options.JsonLog);
+  StageClock               clock(progress);
+  nlohmann::json           report;
+  std::vector<std::string> warnings;
+  const CheckedOptions     checked = CheckUnwrapOptions(options);
+  const GroundTruth        truth = ReadGroundTruth(options.GroundTruth);
+
+  clock.Start("read", "reading " + options.Input);
+  const Scan scan = ReadScan(options, progress, report["input"], warnings);
+  clock.End("read");
+
+  clock.Start("segment", "segmenting the sheet");
+  auto segmentation = SegmentationType::New();
+  segmentation->SetInput(scan.Filled.Volume);
+  segmentation->SetAutomaticThreshold(!checked.FixedThreshold);
+  segmentation->SetThreshold(checked.Threshold);
+  progress.Observe(segmentation);
+  segmentation->Update();
+  clock.End("segment");
+
+  clock.Start("mesh", "meshing the sheets' mid-surfaces");
+  auto surfaceFilter = SurfaceFilterType::New();
+  surfaceFilter->SetInput(segmentation->GetOutput());
+  surfaceFilter->SetIntensityImage(scan.Filled.Volume);
+  surfaceFilter->SetMethod(itk::SheetSurfaceMethodFromString(options.Method));
+  surfaceFilter->SetSpacingAlongSheet(checked.MeshSpacing[0]);
+  surfaceFilter->SetSpacingAlongAxis(checked.MeshSpacing[1]);
+  surfaceFilter->EverySheetOn();
+  surfaceFilter->SetMinimumSheetArea(checked.MinimumSheetArea);
+  progress.Observe(surfaceFilter);
+  surfaceFilter->Update();
+  for (unsigned int i = 0; i < surfaceFilter->GetNumberOfSheets(); ++i)
+  {
+    for (const auto & w : surfaceFilter->GetSheetReport(i).Warnings)
+    {
+      warnings.push_back((surfaceFilter->GetNumberOfSheets() > 1 ? "mesh, sheet " + std::to_string(i + 1) + ": "
+                                                                 : std::string("mesh: ")) +
+                         w);
+    }
+  }
+  const std::vector<unsigned int> sheets = PickSheets(checked, *surfaceFilter);
+  clock.End("mesh");
+
+  // Into a staging folder beside the output, moved into place when complete: an error, a
+  // signal or a kill leaves the output as it was. One sheet: its files in the output
+  // folder; several: a folder sheet-NN for each.
+  OutputStaging      output(fs::path(options.Output), OutputStaging::Kind::Folder);
+  const SheetContext context{ options, scan, *segmentation, truth, progress, clock, output };
+  nlohmann::json     found = nlohmann::json::array();
+  for (unsigned int i = 0; i < surfaceFilter->GetNumberOfSheets(); ++i)
+  {
+    found.push_back(SheetEntryJson(*surfaceFilter, i));
+    found.back()["unwrapped"] = std::find(sheets.begin(), sheets.end(), i) != sheets.end();
+  }
+  report["sheets"] = found;
+  report["dropped"] = DroppedJson(*surfaceFilter);
+  nlohmann::json threshold = { { "value", segmentation->GetThreshold() }, { "automatic", !checked.FixedThreshold } };
+  if (sheets.size() == 1)
+  {
+    report.update(UnwrapSheet(context, *surfaceFilter, sheets.front(), output.Path()));
+    report["sheet"] = sheets.front() + 1;
+  }
+  else
+  {
+    unsigned int unwrapped = 0;
+    for (unsigned int i : sheets)
+    {
+      char name[16];
+      std::snprintf(name, sizeof(name), "sheet-%02u", i + 1);
+      nlohmann::json sheetReport;
+      try
+      {
+        sheetReport = UnwrapSheetOrFail(context, *surfaceFilter, i, output.Path() / name);
+      }
+      catch (const SheetFailure & e)
+      {
+        // One sheet that cannot be flattened or textured leaves the others: it is named.
+        fs::remove_all(output.Path() / name);
+        found[i]["unwrapped"] = false;
+        found[i]["error"] = e.what();
+        warnings.push_back("sheet " + std::to_string(i + 1) + " could not be unwrapped: " + e.what());
+        continue;
+      }
+      ++unwrapped;
+      sheetReport["sheet"] = found[i];
+      sheetReport["parameters"]["threshold"] = threshold;
+      WriteTextFileAtomically((output.Path() / name / "report.json").string(), sheetReport.dump(2) + "\n");
+      found[i]["folder"] = name;
+      if (sheetReport.contains("legibility"))
+      {
+        found[i]["legibility"] = sheetReport["legibility"];
+      }
+    }
+    report["sheets"] = found;
+    if (unwrapped == 0)
+    {
+      throw UsageError("none of the " + std::to_string(sheets.size()) +
+                       " sheets found could be unwrapped: " + found[sheets.front()]["error"].get<std::string>());
+    }
+  }
+  report["parameters"]["threshold"] = threshold;
   report["stages"] = clock.Stages();
   report["warnings"] = warnings;
   report["seconds"] = clock.Seconds();
   report["peak_memory_mib"] = PeakMemoryMiB();
   WriteTextFileAtomically((output.Path() / "report.json").string(), report.dump(2) + "\n");
+  RemoveOtherLayout(fs::path(options.Output), sheets.size() > 1);
   output.Commit();
   progress.Finish(options.Output, report);
 }
@@ -831,6 +1093,22 @@ RegisterUnwrapCommand(CLI::App & app)
   command->add_option("--method", options.Method, "mid-surface method: auto, roll or general")
     ->capture_default_str()
     ->check(CLI::IsMember({ "auto", "roll", "general" }))
+    ->group(seg);
+  command
+    ->add_option("--sheet",
+                 options.Sheet,
+                 "which sheet to unwrap: all (each into OUTDIR/sheet-NN when there are several, numbered from 1 "
+                 "by size) or a sheet's number")
+    ->capture_default_str()
+    ->group(seg);
+  command->add_option("--seed-point", options.SeedPoint, "unwrap only the sheet nearest this point X,Y,Z (mm)")
+    ->group(seg);
+  command
+    ->add_option("--minimum-sheet-area",
+                 options.MinimumSheetArea,
+                 "pieces of material below this area (mm^2) are counted, not unwrapped; auto: 1 % of the largest "
+                 "sheet's area and at least 400 voxels")
+    ->capture_default_str()
     ->group(seg);
   const std::string tex = "Texture";
   command

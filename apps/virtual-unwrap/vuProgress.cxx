@@ -17,6 +17,8 @@
  *=========================================================================*/
 #include "vuProgress.h"
 
+#include <algorithm>
+
 #include "vuOutput.h"
 
 #include "itkCommand.h"
@@ -136,12 +138,43 @@ Progress::Finish(const std::string & outputDirectory, const nlohmann::json & rep
   {
     return;
   }
-  std::cout << "results in " << outputDirectory << " (texture.png, flat.obj, preview.png, report.json)" << std::endl;
-  if (report.contains("legibility"))
-  {
-    const auto & l = report["legibility"];
+  auto legibility = [](const nlohmann::json & l) {
     std::cout << "texture NCC " << l["texture_ncc"].get<double>() << ", OCR character error rate "
               << l["character_error_rate"].get<double>() << std::endl;
+  };
+  const bool folders = report.contains("sheets") &&
+                       std::any_of(report["sheets"].begin(), report["sheets"].end(), [](const nlohmann::json & sheet) {
+                         return sheet.contains("folder");
+                       });
+  if (!folders)
+  {
+    std::cout << "results in " << outputDirectory << " (texture.png, flat.obj, preview.png, report.json)" << std::endl;
+    if (report.contains("legibility"))
+    {
+      legibility(report["legibility"]);
+    }
+    return;
+  }
+  std::cout << "results in " << outputDirectory << ": " << report["sheets"].size()
+            << " sheets found, each unwrapped in a folder of its own (texture.png, flat.obj, preview.png, "
+               "report.json); the list in "
+               "report.json"
+            << std::endl;
+  for (const auto & sheet : report["sheets"])
+  {
+    if (sheet.contains("folder"))
+    {
+      std::cout << "  " << sheet["folder"].get<std::string>() << ": " << sheet["area_mm2"].get<double>() << " mm^2";
+      if (sheet.contains("legibility"))
+      {
+        std::cout << ", ";
+        legibility(sheet["legibility"]);
+      }
+      else
+      {
+        std::cout << std::endl;
+      }
+    }
   }
 }
 } // namespace vu
