@@ -323,12 +323,12 @@ def tool_sheets(out):
     with open(os.path.join(out, "report.json")) as f:
         report = json.load(f)
     found = report.get("sheets", [])
-    if found and "folder" in found[0]:
+    if any("folder" in s for s in found):
         return [(os.path.join(out, s["folder"]), s) for s in found if "folder" in s]
-    return [(out, found[0] if found else {})]
+    return [(out, found[0] if found else {})] if os.path.exists(os.path.join(out, "surface.obj")) else []
 
 
-def score_scene(scene_dir, workdir):
+def score_scene(scene_dir, workdir, ocr=True):
     with open(os.path.join(scene_dir, "truth.json")) as f:
         truth = json.load(f)
     with open(os.path.join(scene_dir, "tool.json")) as f:
@@ -375,7 +375,7 @@ def score_scene(scene_dir, workdir):
         d = stress.mesh_to_surface_distance(verts, faces, sample, 0.5)
         row["coverage"] = float(np.mean(d <= 1.0))
         texture = os.path.join(folder, "texture.png")
-        if os.path.exists(texture):
+        if ocr and os.path.exists(texture):
             row.update({"cer": stress.ocr_score(texture, truth["sheets"][k]["text"], workdir)["cer"]})
         row["success"] = bool(row["mesh_error"] <= stress.SUCCESS_ERROR and row["jumps"] == 0
                               and row["coverage"] >= stress.SUCCESS_COVERAGE)
@@ -383,9 +383,9 @@ def score_scene(scene_dir, workdir):
     return rows
 
 
-def process(kind, seed, root, tool, keep, timeout=1800):
+def process(kind, seed, root, tool, keep, timeout=1800, overrides=None, ocr=True):
     scene_dir = os.path.join(root, f"{kind}-{seed}")
-    generate(kind, seed, scene_dir)
+    generate(kind, seed, scene_dir, overrides)
     out = os.path.join(scene_dir, "unwrap")
     cmd = [tool, "unwrap", os.path.join(scene_dir, "volume.mha"), "-o", out, "-q"]
     started = time.time()
@@ -399,7 +399,7 @@ def process(kind, seed, root, tool, keep, timeout=1800):
                    "seconds_tool": round(time.time() - started, 2)}, f, indent=1)
     workdir = os.path.join(scene_dir, "ocr")
     os.makedirs(workdir, exist_ok=True)
-    rows = score_scene(scene_dir, workdir)
+    rows = score_scene(scene_dir, workdir, ocr)
     for r in rows:
         r["seconds_tool"] = round(time.time() - started, 2)
     if keep == "none" or (keep == "failures" and all(r["success"] and r["legible"] for r in rows)):
@@ -443,17 +443,38 @@ def main():
     r.add_argument("--tool", default="build/bin/virtual-unwrap")
     r.add_argument("--csv", default=None)
     r.add_argument("--keep", choices=("failures", "all", "none"), default="failures")
+    c = sub.add_parser("check", help="one scene through the tool; exit 1 unless every sheet meets --require")
+    c.add_argument("--kind", choices=KINDS, required=True)
+    c.add_argument("--seed", type=int, default=None, help="default: drawn now (printed)")
+    c.add_argument("--out", required=True)
+    c.add_argument("--tool", default="build/bin/virtual-unwrap")
+    c.add_argument("--param", action="append", default=[], help="key=value overriding a drawn parameter")
+    c.add_argument("--require", choices=("found", "mesh"), default="mesh",
+                   help="found: every sheet found apart; mesh: and each one's mesh succeeds")
     s = sub.add_parser("summary")
     s.add_argument("--csv", required=True)
     args = parser.parse_args()
-    if args.command == "generate":
+    if args.command in ("generate", "check"):
+        if args.seed is None:
+            args.seed = int(np.random.default_rng().integers(1, 2 ** 31 - 1))
         overrides = {}
         for item in args.param:
             key, value = item.split("=", 1)
             overrides[key] = type(draw_scene(args.kind, args.seed)[0][key])(value)
-        truth = generate(args.kind, args.seed, args.out, overrides)
-        print(json.dumps(truth["parameters"], indent=1))
-        return 0
+        if args.command == "generate":
+            truth = generate(args.kind, args.seed, args.out, overrides)
+            print(json.dumps(truth["parameters"], indent=1))
+            return 0
+        shutil.rmtree(args.out, ignore_errors=True)
+        rows = process(args.kind, args.seed, args.out, args.tool, "all", overrides=overrides, ocr=False)
+        bad = 0
+        for row in rows:
+            ok = row["found"] and (args.require == "found" or row["success"])
+            bad += 0 if ok else 1
+            print(f"{args.kind} seed {args.seed} sheet {row['sheet']}/{row['sheets_true']}: found {row['found']}, "
+                  f"error {row['mesh_error']:.3f}, jumps {row['jumps']}, coverage {row['coverage']:.3f}"
+                  f"{'' if ok else '  FAILED'}")
+        return 1 if bad else 0
     if args.command == "summary":
         with open(args.csv) as f:
             print(summary(list(csv.DictReader(f))))
