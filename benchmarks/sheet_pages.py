@@ -235,12 +235,11 @@ def draw_scene(kind, seed, overrides=None):
     if kind == "pair":
         length, width = rng.uniform(90, 130), rng.uniform(50, 70)
         tilt = math.radians(rng.uniform(-8, 8))
-        e_len, normal = np.array([math.cos(tilt), math.sin(tilt), 0.0]), np.array([-math.sin(tilt), math.cos(tilt), 0.0])
-        e_wid = np.array([0.0, 0.0, 1.0])
-        normal = np.cross(e_len, e_wid)
-        base = np.array([margin, margin + 12.0, margin])
+        e_len, e_wid = np.array([math.cos(tilt), math.sin(tilt), 0.0]), np.array([0.0, 0.0, 1.0])
+        up = np.array([-math.sin(tilt), math.cos(tilt), 0.0])  # the second sheet lies above the first
+        base = np.array([margin, margin + 4.0 + max(0.0, -length * math.sin(tilt)), margin])
         for k in range(2):
-            origin = base + k * (p["separation"] + t) * normal
+            origin = base + k * (p["separation"] + t) * up
             sheets.append(flat_page(origin, e_len, e_wid, length, width, t, 1 if k == 0 else -1))
     elif kind == "book":
         length, width = rng.uniform(90, 130), rng.uniform(50, 70)
@@ -277,8 +276,9 @@ def draw_scene(kind, seed, overrides=None):
             tilt = math.radians(rng.uniform(-20, 20))
             e_len = np.array([math.cos(tilt), math.sin(tilt), 0.0]) if k == 0 else np.array([0.0, 1.0, 0.0])
             e_wid = np.array([0.0, 0.0, 1.0])
-            origin = (np.array([x0, margin + 4.0, margin + rng.uniform(0, 8)]) if k == 0 else
-                      np.array([margin + rng.uniform(0, 10), centre[1] + outer + rng.uniform(10, 16), margin]))
+            origin = (np.array([x0, margin + 7.0 + max(0.0, -length * math.sin(tilt)), margin + rng.uniform(0, 8)])
+                      if k == 0 else
+                      np.array([margin + 3.0 + rng.uniform(0, 10), centre[1] + outer + rng.uniform(10, 16), margin]))
             sheets.append(flat_page(origin, e_len, e_wid, length, fw, t, 1 if rng.random() < 0.5 else -1,
                                     bow=rng.uniform(-3, 3)))
         p.update({"turns": turns, "inner_radius": inner, "pitch": pitch})
@@ -291,6 +291,9 @@ def generate(kind, seed, out, overrides=None):
     started = time.time()
     p, sheets = draw_scene(kind, seed, overrides)
     reach = max(s.thickness for s in sheets) + 4.0 * p["blur"] + 4.0
+    lowest = np.min([s.points.reshape(-1, 3).min(axis=0) for s in sheets], axis=0)
+    if not np.all(lowest >= max(s.thickness for s in sheets) + 2.0 * p["blur"]):
+        raise ValueError(f"a sheet of the scene leaves the volume (lowest point {lowest})")
     top = np.max([s.points.reshape(-1, 3).max(axis=0) for s in sheets], axis=0)
     dims = tuple(int(math.ceil(v + reach + 4)) for v in top)
     clean = rasterise(sheets, dims, p["ink_contrast"])

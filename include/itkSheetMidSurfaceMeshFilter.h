@@ -63,10 +63,12 @@ namespace itk {
  * times voxel volume over the first sheet's measured thickness) is below
  * MinimumSheetArea (mm^2; 0: automatic, 1 % of the first sheet's area and at least 400
  * in-plane voxels) is counted as too small, one that cannot be traced is dropped with the
- * reason (GetDroppedPieces()). Sheets are numbered from 0 by size; sheet i is output i
- * (GetOutput(i)), GetSheetMesh(i), GetSheetReport(i) and GetSheetSummary(i) (voxels,
- * area, physical bounds, pieces, confidence). Output 0 and GetSheetMesh() are the first,
- * largest sheet either way. FindSheetNearestTo(point) picks a sheet by a seed point.
+ * reason (GetDroppedPieces()). A piece that is not a roll is split into the sheets that
+ * touch in it (pages stuck together; itk::SplitTouchingSheets), each meshed on its own.
+ * Sheets are numbered from 0 by size: GetSheetOutput(i) (an itk::Mesh),
+ * GetSheetMesh(i), GetSheetReport(i) and GetSheetSummary(i) (voxels, area, physical
+ * bounds, pieces, confidence). The output and GetSheetMesh() are the first, largest sheet
+ * either way. FindSheetNearestTo(point) picks a sheet by a seed point.
  * Outputs: the itk::Mesh (triangles; grid rows, columns and per-point (row, column) in its
  * meta-data dictionary, keys of itkSheetMeshAdaptor.h), GetSheetMesh() (the same as plain
  * arrays, GridIndex set), GetReport() (method used, spacings, thickness, smallest radius
@@ -148,17 +150,11 @@ public:
   itkSetClampMacro(MinimumSheetArea, double, 0.0, NumericTraits<double>::max());
   itkGetConstMacro(MinimumSheetArea, double);
 
-  /** Output 0: the first (largest) sheet's mesh; output i: sheet i's. */
+  /** Sheet i's mesh as the output mesh type: the output itself for sheet 0, a mesh of its
+   * own (built on the first request after an Update, not connected to the pipeline) for
+   * the others. */
   OutputMeshType *
-  GetOutput()
-  {
-    return Superclass::GetOutput();
-  }
-  OutputMeshType *
-  GetOutput(unsigned int sheet)
-  {
-    return dynamic_cast<OutputMeshType *>(this->ProcessObject::GetOutput(sheet));
-  }
+  GetSheetOutput(unsigned int sheet);
 
   /** Sheets meshed by the last Update(): 1 unless EverySheet is on. */
   unsigned int
@@ -298,18 +294,19 @@ private:
           typename IntensityImageType::Pointer & sheetIntensity,
           std::vector<std::string> &             warnings) const;
 
-  SheetSurfaceMethodEnum m_Method{ SheetSurfaceMethodEnum::Auto };
-  double                 m_SpacingAlongSheet{ 0.0 };
-  double                 m_SpacingAlongAxis{ 0.0 };
-  double                 m_ChordErrorFraction{ 0.1 };
-  double                 m_AxisTiltTolerance{ 2.0 };
-  bool                   m_EverySheet{ false };
-  double                 m_MinimumSheetArea{ 0.0 };
-  double                 m_MinimumSheetAreaUsed{ 0.0 };
-  std::vector<Sheet>     m_Sheets;
-  Sheet                  m_Empty;
-  DroppedSheetPieces     m_Dropped;
-  SheetMidSurfaceReport  m_Report;
+  SheetSurfaceMethodEnum                        m_Method{ SheetSurfaceMethodEnum::Auto };
+  double                                        m_SpacingAlongSheet{ 0.0 };
+  double                                        m_SpacingAlongAxis{ 0.0 };
+  double                                        m_ChordErrorFraction{ 0.1 };
+  double                                        m_AxisTiltTolerance{ 2.0 };
+  bool                                          m_EverySheet{ false };
+  double                                        m_MinimumSheetArea{ 0.0 };
+  double                                        m_MinimumSheetAreaUsed{ 0.0 };
+  std::vector<Sheet>                            m_Sheets;
+  std::vector<typename OutputMeshType::Pointer> m_SheetOutputs;
+  Sheet                                         m_Empty;
+  DroppedSheetPieces                            m_Dropped;
+  SheetMidSurfaceReport                         m_Report;
 };
 } // end namespace itk
 

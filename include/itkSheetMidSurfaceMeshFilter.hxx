@@ -20,6 +20,7 @@
 
 #include "itkConnectedComponentImageFilter.h"
 #include "itkGradientRecursiveGaussianImageFilter.h"
+#include "itkImageRegionConstIteratorWithIndex.h"
 #include "itkLabelStatisticsImageFilter.h"
 #include "itkNearestNeighborInterpolateImageFunction.h"
 #include "itkParallelImageRows.h"
@@ -28,6 +29,7 @@
 #include "itkSheetMeshAdaptor.h"
 #include "itkSheetMidSurfaceMeshFilter.h"
 #include "itkSmoothingRecursiveGaussianImageFilter.h"
+#include "itkTouchingSheetSplitter.h"
 
 #include <algorithm>
 #include <array>
@@ -106,10 +108,12 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   const double voxelVolume = spacing[0] * spacing[1] * spacing[2];
   // Pieces meshed as part of a sheet, dropped or counted as too small.
   std::vector<uint8_t> done(objects + 1, 0);
-  auto                 meshPieces = [&](const std::vector<uint8_t> & keep, std::vector<std::string> & warnings) {
-    auto kept = [&keep](SizeValueType label) { return label < keep.size() && keep[label] != 0; };
+  // The sheet made of the pieces of `source` (the labels, or a piece split into the sheets
+  // that touch in it) whose labels are kept.
+  auto meshLabels = [&](const auto * source, const std::vector<uint8_t> & keep, std::vector<std::string> & warnings) {
+    auto kept = [&keep](auto label) { return static_cast<size_t>(label) < keep.size() && keep[label] != 0; };
     // Read only the bounding box of the sheet, plus two voxels.
-    const typename MaskImageType::RegionType box = BoundingRegionWhere(labels, kept, 2);
+    const typename MaskImageType::RegionType box = BoundingRegionWhere(source, kept, 2);
 
     // The sheet's box as images of their own (index 0 at the box corner).
     typename SheetImageType::RegionType boxRegion;
@@ -133,7 +137,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     {
       // Row by row, the slices in parallel; the intensities lie where the labels do.
       const auto boxSize = box.GetSize();
-      ForEachImageRow(labels, box, [&](SizeValueType k, SizeValueType j, const SizeValueType * label) {
+      ForEachImageRow(source, box, [&](SizeValueType k, SizeValueType j, const auto * label) {
         const SizeValueType to = (k * boxSize[1] + j) * boxSize[0];
         uint8_t *           out = sheetMask->GetBufferPointer() + to;
         for (SizeValueType i = 0; i < boxSize[0]; ++i)
@@ -142,7 +146,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
         }
         if (intensity != nullptr)
         {
-          std::copy_n(intensity->GetBufferPointer() + (label - labels->GetBufferPointer()),
+          std::copy_n(intensity->GetBufferPointer() + (label - source->GetBufferPointer()),
                       boxSize[0],
                       sheetIntensity->GetBufferPointer() + to);
         }
@@ -185,6 +189,9 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     // From the (possibly resampled) box's scaled voxel frame to the physical frame.
     ToPhysicalFrame(sheetMask->GetOrigin(), sheetMask->GetDirection(), sheet.Mesh);
     return sheet;
+  };
+  auto meshPieces = [&](const std::vector<uint8_t> & keep, std::vector<std::string> & warnings) {
+    return meshLabels(labels, keep, warnings);
   };
 
   // The sheet made from a piece: with the smaller pieces in its box that trace with it as
@@ -256,6 +263,76 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     itkExceptionMacro(<< "no sheet: the largest piece of material covers " << largest
                       << " mm^2, less than the minimum sheet area of " << m_MinimumSheetAreaUsed << " mm^2");
   }
+  // A piece that is not a roll may hold sheets that touch (pages stuck together): split
+  // along the dip of the plate measure between them and mesh each.
+  const double minimumCoreVoxels = 0.5 * m_MinimumSheetAreaUsed / (spacing[0] * spacing[1]);
+  auto         splitSheet = [&](SizeValueType piece, Sheet & whole, std::vector<std::string> & warnings) {
+    std::vector<Sheet> sheets;
+    if (!m_EverySheet || whole.Report.Method == SheetSurfaceMethodEnum::Roll || whole.Summary.Pieces != 1)
+    {
+      sheets.push_back(std::move(whole));
+      return sheets;
+    }
+    auto box = pieces->GetRegion(piece);
+    box.PadByRadius(3);
+    box.Crop(labels->GetBufferedRegion());
+    using PieceImageType = Image<uint8_t, 3>;
+    auto pieceMask = PieceImageType::New();
+    pieceMask->CopyInformation(labels);
+    pieceMask->SetRegions(box);
+    pieceMask->Allocate();
+    auto values = IntensityImageType::New();
+    values->CopyInformation(labels);
+    values->SetRegions(box);
+    values->Allocate();
+    for (ImageRegionConstIteratorWithIndex<LabelImageType> it(labels, box); !it.IsAtEnd(); ++it)
+    {
+      const bool on = it.Get() == piece;
+      pieceMask->SetPixel(it.GetIndex(), on ? 1 : 0);
+      values->SetPixel(it.GetIndex(), intensity != nullptr ? intensity->GetPixel(it.GetIndex()) : (on ? 1.0f : 0.0f));
+    }
+    const double             sigma = std::min({ spacing[0], spacing[1], spacing[2] });
+    const TouchingSheetSplit split =
+      SplitTouchingSheets(values, pieceMask, sigma, static_cast<SizeValueType>(std::max(1.0, minimumCoreVoxels)));
+    if (split.Sheets < 2)
+    {
+      sheets.push_back(std::move(whole));
+      return sheets;
+    }
+    // The split labels over the whole mask, so that each sheet is read like a piece.
+    auto splitLabels = Image<uint16_t, 3>::New();
+    splitLabels->CopyInformation(labels);
+    splitLabels->SetRegions(labels->GetBufferedRegion());
+    splitLabels->Allocate();
+    splitLabels->FillBuffer(0);
+    for (ImageRegionConstIteratorWithIndex<Image<uint16_t, 3>> it(split.Labels, box); !it.IsAtEnd(); ++it)
+    {
+      splitLabels->SetPixel(it.GetIndex(), it.Get());
+    }
+    std::ostringstream text;
+    text << "a piece of " << whole.Summary.Voxels << " voxels holds " << split.Sheets
+         << " sheets that touch: split between them";
+    warnings.push_back(text.str());
+    for (unsigned int k = 1; k <= split.Sheets; ++k)
+    {
+      std::vector<uint8_t> keep(k + 1, 0);
+      keep[k] = 1;
+      std::vector<std::string> sheetWarnings;
+      Sheet                    sheet = meshLabels(splitLabels.GetPointer(), keep, sheetWarnings);
+      sheet.Summary.Voxels = 0;
+      for (ImageRegionConstIterator<Image<uint16_t, 3>> it(split.Labels, box); !it.IsAtEnd(); ++it)
+      {
+        sheet.Summary.Voxels += it.Get() == k ? 1 : 0;
+      }
+      sheet.Report.Warnings.insert(sheet.Report.Warnings.begin(), sheetWarnings.begin(), sheetWarnings.end());
+      sheets.push_back(std::move(sheet));
+    }
+    return sheets;
+  };
+  {
+    Sheet first = std::move(m_Sheets.front());
+    m_Sheets = splitSheet(1, first, warnings);
+  }
   for (SizeValueType l = 2; m_EverySheet && l <= objects; ++l)
   {
     if (done[l] != 0)
@@ -273,8 +350,11 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     try
     {
       Sheet sheet = meshSheetFrom(l, sheetWarnings);
-      sheet.Report.Warnings.insert(sheet.Report.Warnings.begin(), sheetWarnings.begin(), sheetWarnings.end());
-      m_Sheets.push_back(std::move(sheet));
+      for (Sheet & part : splitSheet(l, sheet, sheetWarnings))
+      {
+        part.Report.Warnings.insert(part.Report.Warnings.begin(), sheetWarnings.begin(), sheetWarnings.end());
+        m_Sheets.push_back(std::move(part));
+      }
     }
     catch (const ExceptionObject & e)
     {
@@ -321,24 +401,25 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     }
     warnings.insert(warnings.begin(), text.str());
   }
+  // Sheets numbered by size.
+  std::stable_sort(m_Sheets.begin(), m_Sheets.end(), [](const Sheet & a, const Sheet & b) {
+    return a.Summary.Voxels > b.Summary.Voxels;
+  });
   Sheet & first = m_Sheets.front();
   first.Report.Warnings.insert(first.Report.Warnings.begin(), warnings.begin(), warnings.end());
   m_Report = first.Report;
 
-  // The outputs: sheet i is output i, each built in place (a QuadEdgeMesh must not share
-  // its cells with a temporary mesh: it deletes them when it is destroyed).
-  this->SetNumberOfIndexedOutputs(static_cast<ProcessObject::DataObjectPointerArraySizeType>(m_Sheets.size()));
-  for (unsigned int i = 0; i < m_Sheets.size(); ++i)
+  // The output is the first sheet, built in place (a QuadEdgeMesh must not share its cells
+  // with a temporary mesh: it deletes them when it is destroyed); the others are built on
+  // request by GetSheetOutput (outputs added here would mark the filter modified, and the
+  // next downstream update would run it again).
+  m_SheetOutputs.assign(m_Sheets.size(), nullptr);
+  for (Sheet & sheet : m_Sheets)
   {
-    Sheet & sheet = m_Sheets[i];
-    if (this->GetOutput(i) == nullptr)
-    {
-      this->SetNthOutput(i, this->MakeOutput(i));
-    }
-    SheetMeshIntoMesh(sheet.Mesh, this->GetOutput(i));
-    MarkMeshWhole(this->GetOutput(i));
     Summarise(sheet, areaOf(sheet.Summary.Voxels));
   }
+  SheetMeshIntoMesh(m_Sheets.front().Mesh, this->GetOutput());
+  MarkMeshWhole(this->GetOutput());
   this->UpdateProgress(1.0f);
 }
 
@@ -454,6 +535,25 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::Summarise(Sheet & sheet, dou
     }
   }
   summary.Confidence = std::max(0.0, traced) * (counted > 0 ? confirmed / static_cast<double>(counted) : 1.0);
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+auto
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GetSheetOutput(unsigned int sheet) -> OutputMeshType *
+{
+  if (sheet >= m_Sheets.size())
+  {
+    itkExceptionMacro(<< "sheet " << sheet << " requested of " << m_Sheets.size());
+  }
+  if (sheet == 0)
+  {
+    return this->GetOutput();
+  }
+  if (!m_SheetOutputs[sheet])
+  {
+    m_SheetOutputs[sheet] = SheetMeshToMesh<OutputMeshType>(m_Sheets[sheet].Mesh);
+  }
+  return m_SheetOutputs[sheet].GetPointer();
 }
 
 template <typename TMaskImage, typename TOutputMesh>

@@ -373,7 +373,7 @@ TEST(SheetMidSurfaceMeshFilter, EverySheetIsMeshedAndSpecksAreCounted)
   {
     const itk::SheetMesh & mesh = filter->GetSheetMesh(sheet);
     EXPECT_EQ(CountConnectedPieces(mesh), 1u);
-    EXPECT_EQ(filter->GetOutput(sheet)->GetNumberOfPoints(), mesh.GetNumberOfPoints());
+    EXPECT_EQ(filter->GetSheetOutput(sheet)->GetNumberOfPoints(), mesh.GetNumberOfPoints());
     for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
     {
       ASSERT_NEAR(mesh.Points[3 * i + 1], 0.5 * rows[sheet], 0.05) << "sheet " << sheet << ", point " << i;

@@ -773,7 +773,7 @@ UnwrapSheet(const SheetContext & context,
   StageClock &                       clock = context.Clock;
   Progress &                         progress = context.Display;
   const itk::SheetMidSurfaceReport & meshReport = surfaceFilter.GetSheetReport(sheet);
-  MeshType *                         surfaceMesh = surfaceFilter.GetOutput(sheet);
+  MeshType *                         surfaceMesh = surfaceFilter.GetSheetOutput(sheet);
   const std::string                  which =
     surfaceFilter.GetNumberOfSheets() > 1 ? "sheet " + std::to_string(sheet + 1) + ": " : std::string();
   Results results;

@@ -1,0 +1,232 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkTouchingSheetSplitter.h"
+
+#include "itkConnectedComponentImageFilter.h"
+#include "itkDanielssonDistanceMapImageFilter.h"
+#include "itkHessianRecursiveGaussianImageFilter.h"
+#include "itkImageRegionConstIterator.h"
+#include "itkRelabelComponentImageFilter.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace itk {
+namespace {
+using PieceImage = Image<uint8_t, 3>;
+using LabelImage = Image<uint32_t, 3>;
+
+// The fractions of the median plate measure at which cores are taken, lowest first.
+constexpr double CoreFractions[] = { 0.6, 0.7, 0.8, 0.9 };
+// The other two eigenvalues must stay below this share of the plate's.
+constexpr double PlateDominance = 0.5;
+// A core that falls apart is split only into parts of at least this share of it.
+constexpr double SliverFraction = 0.05;
+
+// Face-connected components of the voxels where `inside` holds, largest first.
+template <typename TInside>
+LabelImage::Pointer
+Components(const PieceImage * like, TInside inside, std::vector<SizeValueType> & sizes)
+{
+  auto mask = PieceImage::New();
+  mask->CopyInformation(like);
+  mask->SetRegions(like->GetBufferedRegion());
+  mask->Allocate();
+  const SizeValueType n = like->GetBufferedRegion().GetNumberOfPixels();
+  for (SizeValueType v = 0; v < n; ++v)
+  {
+    mask->GetBufferPointer()[v] = inside(v) ? 1 : 0;
+  }
+  auto components = ConnectedComponentImageFilter<PieceImage, LabelImage>::New();
+  components->SetInput(mask);
+  components->FullyConnectedOff();
+  auto relabel = RelabelComponentImageFilter<LabelImage, LabelImage>::New();
+  relabel->SetInput(components->GetOutput());
+  relabel->Update();
+  sizes = relabel->GetSizeOfObjectsInPixels();
+  LabelImage::Pointer labels = relabel->GetOutput();
+  labels->DisconnectPipeline();
+  return labels;
+}
+} // namespace
+
+TouchingSheetSplit
+SplitTouchingSheets(const Image<float, 3> * values,
+                    const PieceImage *      piece,
+                    double                  sigma,
+                    SizeValueType           minimumCoreVoxels)
+{
+  if (values == nullptr || piece == nullptr || values->GetBufferedRegion() != piece->GetBufferedRegion())
+  {
+    itkGenericExceptionMacro(<< "SplitTouchingSheets: the values and the piece must cover the same region");
+  }
+  const SizeValueType n = piece->GetBufferedRegion().GetNumberOfPixels();
+  const uint8_t *     in = piece->GetBufferPointer();
+
+  // The plate measure on the piece's voxels.
+  using HessianFilter = HessianRecursiveGaussianImageFilter<Image<float, 3>>;
+  auto hessian = HessianFilter::New();
+  hessian->SetInput(values);
+  hessian->SetSigma(sigma);
+  hessian->SetNormalizeAcrossScale(false);
+  hessian->Update();
+  const auto *        tensors = hessian->GetOutput()->GetBufferPointer();
+  std::vector<float>  plate(n, 0.0f);
+  std::vector<double> measured;
+  for (SizeValueType v = 0; v < n; ++v)
+  {
+    if (in[v] == 0)
+    {
+      continue;
+    }
+    typename HessianFilter::OutputPixelType::EigenValuesArrayType e;
+    tensors[v].ComputeEigenValues(e);
+    std::array<double, 3> sorted{ e[0], e[1], e[2] };
+    std::sort(sorted.begin(), sorted.end());
+    const double across = sorted[0];
+    if (across < 0.0 && std::max(std::abs(sorted[1]), std::abs(sorted[2])) < PlateDominance * -across)
+    {
+      plate[v] = static_cast<float>(-across);
+      measured.push_back(-across);
+    }
+  }
+  TouchingSheetSplit result;
+  result.Labels = Image<uint16_t, 3>::New();
+  result.Labels->CopyInformation(piece);
+  result.Labels->SetRegions(piece->GetBufferedRegion());
+  result.Labels->Allocate();
+  result.Labels->FillBuffer(0);
+  uint16_t * out = result.Labels->GetBufferPointer();
+  auto       whole = [&]() {
+    for (SizeValueType v = 0; v < n; ++v)
+    {
+      out[v] = in[v] != 0 ? 1 : 0;
+    }
+    result.Sheets = 1;
+    return result;
+  };
+  if (measured.size() < 2 * minimumCoreVoxels)
+  {
+    return whole();
+  }
+  std::nth_element(measured.begin(), measured.begin() + measured.size() / 2, measured.end());
+  const double median = measured[measured.size() / 2];
+
+  // Cores: each kept whole unless it falls apart into two or more large cores at the next
+  // fraction. `owner` holds the core (an index into `cores`) of every core voxel.
+  struct Core
+  {
+    std::vector<SizeValueType> Voxels;
+  };
+  std::vector<Core>          cores;
+  std::vector<SizeValueType> sizes;
+  auto                       first = Components(
+    piece, [&](SizeValueType v) { return plate[v] > CoreFractions[0] * median; }, sizes);
+  {
+    std::vector<Core> found(sizes.size());
+    for (SizeValueType v = 0; v < n; ++v)
+    {
+      const uint32_t l = first->GetBufferPointer()[v];
+      if (l > 0 && sizes[l - 1] >= minimumCoreVoxels)
+      {
+        found[l - 1].Voxels.push_back(v);
+      }
+    }
+    for (auto & core : found)
+    {
+      if (!core.Voxels.empty())
+      {
+        cores.push_back(std::move(core));
+      }
+    }
+  }
+  std::vector<uint8_t> inCore(n, 0);
+  for (size_t step = 1; step < std::size(CoreFractions); ++step)
+  {
+    std::vector<Core> next;
+    for (auto & core : cores)
+    {
+      std::fill(inCore.begin(), inCore.end(), 0);
+      for (SizeValueType v : core.Voxels)
+      {
+        inCore[v] = plate[v] > CoreFractions[step] * median ? 1 : 0;
+      }
+      auto parts = Components(
+        piece, [&](SizeValueType v) { return inCore[v] != 0; }, sizes);
+      // Large: a sheet's core, not a speck of noise (and not a sliver of this core).
+      const SizeValueType least =
+        std::max<SizeValueType>(minimumCoreVoxels, static_cast<SizeValueType>(SliverFraction * core.Voxels.size()));
+      const SizeValueType large =
+        std::count_if(sizes.begin(), sizes.end(), [&](SizeValueType s) { return s >= least; });
+      if (large < 2)
+      {
+        next.push_back(std::move(core));
+        continue;
+      }
+      std::vector<Core> split(large);
+      for (SizeValueType v : core.Voxels)
+      {
+        const uint32_t l = parts->GetBufferPointer()[v];
+        if (l > 0 && l <= large)
+        {
+          split[l - 1].Voxels.push_back(v);
+        }
+      }
+      for (auto & part : split)
+      {
+        next.push_back(std::move(part));
+      }
+    }
+    cores = std::move(next);
+  }
+  if (cores.size() < 2)
+  {
+    return whole();
+  }
+  std::sort(
+    cores.begin(), cores.end(), [](const Core & a, const Core & b) { return a.Voxels.size() > b.Voxels.size(); });
+
+  // Every voxel of the piece to its nearest core.
+  auto seeds = LabelImage::New();
+  seeds->CopyInformation(piece);
+  seeds->SetRegions(piece->GetBufferedRegion());
+  seeds->Allocate();
+  seeds->FillBuffer(0);
+  for (size_t c = 0; c < cores.size(); ++c)
+  {
+    for (SizeValueType v : cores[c].Voxels)
+    {
+      seeds->GetBufferPointer()[v] = static_cast<uint32_t>(c + 1);
+    }
+  }
+  auto nearest = DanielssonDistanceMapImageFilter<LabelImage, Image<float, 3>, LabelImage>::New();
+  nearest->SetInput(seeds);
+  nearest->InputIsBinaryOff();
+  nearest->UseImageSpacingOn();
+  nearest->Update();
+  const uint32_t * voronoi = nearest->GetVoronoiMap()->GetBufferPointer();
+  for (SizeValueType v = 0; v < n; ++v)
+  {
+    out[v] = in[v] != 0 ? static_cast<uint16_t>(voronoi[v]) : 0;
+  }
+  result.Sheets = static_cast<unsigned int>(cores.size());
+  return result;
+}
+} // end namespace itk
