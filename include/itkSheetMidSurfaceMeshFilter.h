@@ -182,6 +182,14 @@ public:
   {
     return m_Dropped;
   }
+  /** Which sheet each voxel of the mask belongs to (sheet i: i + 1, 0: none), over the
+   * mask's region; built with EverySheet on, null otherwise. */
+  using SheetLabelImageType = Image<uint16_t, 3>;
+  const SheetLabelImageType *
+  GetSheetLabelImage() const
+  {
+    return m_SheetLabels.GetPointer();
+  }
   /** The minimum sheet area applied by the last Update() (mm^2). */
   double
   GetMinimumSheetAreaUsed() const
@@ -259,6 +267,10 @@ private:
     SheetMesh             Mesh;
     SheetMidSurfaceReport Report;
     SheetSummary          Summary;
+    /** Its voxels: the pieces' labels kept, or one label of a split piece. */
+    std::vector<uint8_t>                   Pieces;
+    SmartPointer<const Image<uint16_t, 3>> Split;
+    uint16_t                               SplitLabel{ 0 };
   };
   using SheetImageType = Image<uint8_t, 3>;
   using AxisType = Vector<double, 3>;
@@ -304,6 +316,7 @@ private:
   double                                        m_MinimumSheetAreaUsed{ 0.0 };
   std::vector<Sheet>                            m_Sheets;
   std::vector<typename OutputMeshType::Pointer> m_SheetOutputs;
+  typename SheetLabelImageType::Pointer         m_SheetLabels;
   Sheet                                         m_Empty;
   DroppedSheetPieces                            m_Dropped;
   SheetMidSurfaceReport                         m_Report;

@@ -222,6 +222,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
         {
           warnings.insert(warnings.end(), groupWarnings.begin(), groupWarnings.end());
           sheet.Summary.Pieces = grouped;
+          sheet.Pieces = group;
           for (SizeValueType l = first; l <= objects; ++l)
           {
             done[l] |= group[l];
@@ -242,6 +243,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     alone[first] = 1;
     done[first] = 1;
     Sheet sheet = meshPieces(alone, warnings);
+    sheet.Pieces = alone;
     sheet.Summary.Voxels = pieceSizes[first - 1];
     return sheet;
   };
@@ -319,6 +321,8 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
       keep[k] = 1;
       std::vector<std::string> sheetWarnings;
       Sheet                    sheet = meshLabels(splitLabels.GetPointer(), keep, sheetWarnings);
+      sheet.Split = splitLabels.GetPointer();
+      sheet.SplitLabel = static_cast<uint16_t>(k);
       sheet.Summary.Voxels = 0;
       for (ImageRegionConstIterator<Image<uint16_t, 3>> it(split.Labels, box); !it.IsAtEnd(); ++it)
       {
@@ -414,6 +418,29 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   // request by GetSheetOutput (outputs added here would mark the filter modified, and the
   // next downstream update would run it again).
   m_SheetOutputs.assign(m_Sheets.size(), nullptr);
+  m_SheetLabels = nullptr;
+  if (m_EverySheet)
+  {
+    m_SheetLabels = SheetLabelImageType::New();
+    m_SheetLabels->CopyInformation(mask);
+    m_SheetLabels->SetRegions(region);
+    m_SheetLabels->Allocate();
+    m_SheetLabels->FillBuffer(0);
+    uint16_t *            out = m_SheetLabels->GetBufferPointer();
+    const SizeValueType * in = labels->GetBufferPointer();
+    const SizeValueType   n = region.GetNumberOfPixels();
+    for (size_t i = 0; i < m_Sheets.size(); ++i)
+    {
+      const Sheet & sheet = m_Sheets[i];
+      const auto    label = static_cast<uint16_t>(std::min<size_t>(i + 1, NumericTraits<uint16_t>::max()));
+      for (SizeValueType v = 0; v < n; ++v)
+      {
+        const bool mine = sheet.Split ? sheet.Split->GetBufferPointer()[v] == sheet.SplitLabel
+                                      : in[v] < sheet.Pieces.size() && sheet.Pieces[in[v]] != 0;
+        out[v] = mine ? label : out[v];
+      }
+    }
+  }
   for (Sheet & sheet : m_Sheets)
   {
     Summarise(sheet, areaOf(sheet.Summary.Voxels));

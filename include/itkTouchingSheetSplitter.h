@@ -28,7 +28,9 @@ namespace itk {
  * A sheet is a bright plate: across it the intensity's second derivative is strongly
  * negative, along it small. The plate measure P = -lambda1 where the Hessian's most
  * negative eigenvalue lambda1 dominates (both others below half its size), 0 elsewhere
- * (itk::HessianRecursiveGaussianImageFilter at Sigma, mm), is high along each sheet's
+ * (itk::HessianRecursiveGaussianImageFilter at a scale of 0.4 times the sheets' thickness,
+ * twice the piece's volume over its surface, and at least Sigma, mm), is
+ * high along each sheet's
  * middle and dips where two sheets meet, even where they fuse with no gap left (two
  * sheets side by side make a slab twice as thick, whose middle bends less). The cores,
  * the piece's voxels where P exceeds a fraction of its median over the piece, are taken
@@ -55,6 +57,13 @@ SplitTouchingSheets(const Image<float, 3> *   values,
                     const Image<uint8_t, 3> * piece,
                     double                    sigma,
                     SizeValueType             minimumCoreVoxels);
+/** A copy of `volume` in which the voxels of the other sheets (labels of `sheets` other
+ * than 0 and `sheet`), and the unlabelled voxels next to them (their blurred faces), hold
+ * the background: the median of the unlabelled voxels. A sheet's texture sampled from it
+ * does not show the sheets that touch it. `sheets` covers the volume's region (as
+ * SheetMidSurfaceMeshFilter::GetSheetLabelImage does). */
+VirtualUnwrapping_EXPORT Image<float, 3>::Pointer
+BlankOtherSheets(const Image<float, 3> * volume, const Image<uint16_t, 3> * sheets, uint16_t sheet);
 } // end namespace itk
 
 #endif

@@ -37,6 +37,8 @@ using LabelImage = Image<uint32_t, 3>;
 constexpr double CoreFractions[] = { 0.6, 0.7, 0.8, 0.9 };
 // The other two eigenvalues must stay below this share of the plate's.
 constexpr double PlateDominance = 0.5;
+// The measure's scale per sheet thickness (a 2.5-voxel sheet: one voxel).
+constexpr double ScalePerThickness = 0.4;
 // A core that falls apart is split only into parts of at least this share of it.
 constexpr double SliverFraction = 0.05;
 
@@ -79,6 +81,39 @@ SplitTouchingSheets(const Image<float, 3> * values,
   }
   const SizeValueType n = piece->GetBufferedRegion().GetNumberOfPixels();
   const uint8_t *     in = piece->GetBufferPointer();
+
+  // The sheets' thickness: twice the piece's volume over its surface (faces between its
+  // voxels and the others; a staircase overstates an oblique sheet's surface, so this
+  // errs thin), so that the measure's scale follows it: at a scale well below a thick
+  // sheet's half thickness, each face would make a ridge of its own.
+  {
+    const auto    size = piece->GetBufferedRegion().GetSize();
+    const auto &  spacing = piece->GetSpacing();
+    SizeValueType voxels = 0, faces = 0;
+    for (SizeValueType z = 0; z < size[2]; ++z)
+    {
+      for (SizeValueType y = 0; y < size[1]; ++y)
+      {
+        for (SizeValueType x = 0; x < size[0]; ++x)
+        {
+          const SizeValueType v = (z * size[1] + y) * size[0] + x;
+          if (in[v] == 0)
+          {
+            continue;
+          }
+          ++voxels;
+          faces += (x == 0 || in[v - 1] == 0) + (x + 1 == size[0] || in[v + 1] == 0);
+          faces += (y == 0 || in[v - size[0]] == 0) + (y + 1 == size[1] || in[v + size[0]] == 0);
+          faces += (z == 0 || in[v - size[0] * size[1]] == 0) + (z + 1 == size[2] || in[v + size[0] * size[1]] == 0);
+        }
+      }
+    }
+    const double voxelSize = std::cbrt(spacing[0] * spacing[1] * spacing[2]);
+    if (faces > 0)
+    {
+      sigma = std::max(sigma, ScalePerThickness * 2.0 * voxelSize * static_cast<double>(voxels) / faces);
+    }
+  }
 
   // The plate measure on the piece's voxels.
   using HessianFilter = HessianRecursiveGaussianImageFilter<Image<float, 3>>;
@@ -228,5 +263,64 @@ SplitTouchingSheets(const Image<float, 3> * values,
   }
   result.Sheets = static_cast<unsigned int>(cores.size());
   return result;
+}
+Image<float, 3>::Pointer
+BlankOtherSheets(const Image<float, 3> * volume, const Image<uint16_t, 3> * sheets, uint16_t sheet)
+{
+  if (volume == nullptr || sheets == nullptr || volume->GetBufferedRegion() != sheets->GetBufferedRegion())
+  {
+    itkGenericExceptionMacro(<< "BlankOtherSheets: the sheets' labels must cover the volume's region");
+  }
+  const auto          size = volume->GetBufferedRegion().GetSize();
+  const SizeValueType n = volume->GetBufferedRegion().GetNumberOfPixels();
+  const float *       in = volume->GetBufferPointer();
+  const uint16_t *    label = sheets->GetBufferPointer();
+  // The background: the median of the unlabelled voxels (a sample of them).
+  std::vector<float>  air;
+  const SizeValueType stride = std::max<SizeValueType>(1, n / 200000);
+  for (SizeValueType v = 0; v < n; v += stride)
+  {
+    if (label[v] == 0 && std::isfinite(in[v]))
+    {
+      air.push_back(in[v]);
+    }
+  }
+  float background = 0.0f;
+  if (!air.empty())
+  {
+    std::nth_element(air.begin(), air.begin() + air.size() / 2, air.end());
+    background = air[air.size() / 2];
+  }
+  auto out = Image<float, 3>::New();
+  out->CopyInformation(volume);
+  out->SetRegions(volume->GetBufferedRegion());
+  out->Allocate();
+  float * o = out->GetBufferPointer();
+  std::copy_n(in, n, o);
+  const SizeValueType strides[3] = { 1, size[0], size[0] * size[1] };
+  for (SizeValueType v = 0; v < n; ++v)
+  {
+    if (label[v] == 0 || label[v] == sheet)
+    {
+      continue;
+    }
+    o[v] = background;
+    // Its unlabelled face-neighbours.
+    SizeValueType rest = v;
+    for (int d = 2; d >= 0; --d)
+    {
+      const SizeValueType at = rest / strides[d];
+      rest %= strides[d];
+      if (at > 0 && label[v - strides[d]] == 0)
+      {
+        o[v - strides[d]] = background;
+      }
+      if (at + 1 < size[d] && label[v + strides[d]] == 0)
+      {
+        o[v + strides[d]] = background;
+      }
+    }
+  }
+  return out;
 }
 } // end namespace itk

@@ -41,6 +41,7 @@
 #include "itkTextLegibility.h"
 #include "itkTextureFidelityCalculator.h"
 #include "itkTextureLayers.h"
+#include "itkTouchingSheetSplitter.h"
 
 #include <sys/resource.h>
 #include <unistd.h>
@@ -794,10 +795,17 @@ UnwrapSheet(const SheetContext & context,
   auto texturer = MakeTexturer(options, meshReport.SheetThickness, context.Segmentation.GetAppliedDenoisingSigma());
   texturer->SetSurfaceMesh(surfaceMesh);
   texturer->SetFlatMesh(flattening->GetOutput());
-  texturer->SetVolume(context.Input.Volume);
+  // Several sheets: each sampled without the others, which may touch it.
+  VolumeType::Pointer volume = context.Input.Volume;
+  if (surfaceFilter.GetNumberOfSheets() > 1 && surfaceFilter.GetSheetLabelImage() != nullptr &&
+      surfaceFilter.GetSheetLabelImage()->GetBufferedRegion() == volume->GetBufferedRegion())
+  {
+    volume = itk::BlankOtherSheets(volume, surfaceFilter.GetSheetLabelImage(), static_cast<uint16_t>(sheet + 1));
+  }
+  texturer->SetVolume(volume);
   progress.Observe(texturer);
   texturer->Update();
-  results.VertexTexture = VertexTexture(surfaceMesh, context.Input.Volume, *texturer);
+  results.VertexTexture = VertexTexture(surfaceMesh, volume, *texturer);
   results.Texture = FlipRows(texturer->GetOutput());
   results.Mask = FlipRows(texturer->GetMaskOutput());
   results.Layers = texturer->GetLayerStackOutput();

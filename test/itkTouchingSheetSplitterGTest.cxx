@@ -1,0 +1,166 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkTouchingSheetSplitter.h"
+
+#include "itkDiscreteGaussianImageFilter.h"
+
+#include "gtest/gtest.h"
+
+#include <cmath>
+#include <random>
+
+namespace {
+using FloatImage = itk::Image<float, 3>;
+using PieceImage = itk::Image<uint8_t, 3>;
+
+struct Scene
+{
+  FloatImage::Pointer Values;
+  PieceImage::Pointer Piece;
+  // The true sheet of each voxel (0: air), nearest sheet middle.
+  std::vector<int> Truth;
+};
+
+// Sheets parallel to the x-z plane, `thickness` voxels thick, centred at rows `middles`;
+// the first bulges by `bump` voxels towards the second over a disc of radius 6 at the
+// middle of the sheet, and the scene is blurred (sigma 0.7 voxel) with noise at SNR 8.
+Scene
+MakeScene(const std::vector<double> & middles, double thickness, double bump, unsigned seed)
+{
+  const unsigned         nx = 48, ny = 40, nz = 24;
+  auto                   clean = FloatImage::New();
+  FloatImage::RegionType region;
+  region.SetSize({ { nx, ny, nz } });
+  clean->SetRegions(region);
+  clean->Allocate();
+  Scene scene;
+  scene.Truth.assign(region.GetNumberOfPixels(), 0);
+  for (unsigned z = 0; z < nz; ++z)
+  {
+    for (unsigned y = 0; y < ny; ++y)
+    {
+      for (unsigned x = 0; x < nx; ++x)
+      {
+        double       value = 0.0, nearest = 1e9;
+        int          owner = 0;
+        const double r2 = (x - 24.0) * (x - 24.0) + (z - 12.0) * (z - 12.0);
+        for (size_t s = 0; s < middles.size(); ++s)
+        {
+          const double middle = middles[s] + (s == 0 ? bump * std::exp(-r2 / (2.0 * 6.0 * 6.0)) : 0.0);
+          const double d = std::abs(y - middle);
+          value = std::max(value, std::clamp(0.5 * thickness - d + 0.5, 0.0, 1.0));
+          if (d < nearest)
+          {
+            nearest = d;
+            owner = static_cast<int>(s) + 1;
+          }
+        }
+        const size_t v = (static_cast<size_t>(z) * ny + y) * nx + x;
+        clean->GetBufferPointer()[v] = static_cast<float>(value);
+        scene.Truth[v] = value > 0.5 ? owner : 0;
+      }
+    }
+  }
+  auto blur = itk::DiscreteGaussianImageFilter<FloatImage, FloatImage>::New();
+  blur->SetInput(clean);
+  blur->SetVariance(0.49);
+  blur->SetUseImageSpacing(false);
+  blur->Update();
+  scene.Values = blur->GetOutput();
+  std::mt19937                    random(seed);
+  std::normal_distribution<float> noise(0.0f, 1.0f / 8.0f);
+  scene.Piece = PieceImage::New();
+  scene.Piece->SetRegions(region);
+  scene.Piece->Allocate();
+  for (size_t v = 0; v < region.GetNumberOfPixels(); ++v)
+  {
+    scene.Values->GetBufferPointer()[v] += noise(random);
+    scene.Piece->GetBufferPointer()[v] = scene.Truth[v] != 0 ? 1 : 0;
+  }
+  return scene;
+}
+} // namespace
+
+// Two sheets 2 voxels apart, fused where one bulges onto the other (no gap left): one
+// piece of the mask, split into the two sheets; every voxel of each goes to its own.
+TEST(TouchingSheetSplitter, FusedSheetsAreSplitBetweenThem)
+{
+  const unsigned seed = std::random_device{}();
+  const Scene    scene = MakeScene({ 12.0, 17.0 }, 3.0, 2.25, seed);
+  const auto     split = itk::SplitTouchingSheets(scene.Values, scene.Piece, 1.0, 200);
+  ASSERT_EQ(split.Sheets, 2u) << "seed " << seed;
+  // Each true sheet's voxels carry one label, the other sheet's the other.
+  size_t counts[3][3] = {};
+  for (size_t v = 0; v < scene.Truth.size(); ++v)
+  {
+    ++counts[scene.Truth[v]][split.Labels->GetBufferPointer()[v]];
+  }
+  EXPECT_EQ(counts[0][1] + counts[0][2], 0u) << "air labelled";
+  const size_t a = counts[1][1] > counts[1][2] ? 1 : 2, b = 3 - a;
+  const double wrongA = static_cast<double>(counts[1][b]) / (counts[1][1] + counts[1][2]);
+  const double wrongB = static_cast<double>(counts[2][a]) / (counts[2][1] + counts[2][2]);
+  EXPECT_LT(wrongA, 0.01) << "seed " << seed;
+  EXPECT_LT(wrongB, 0.01) << "seed " << seed;
+}
+
+// One sheet, bent, thin or thick (its two faces are not two sheets): never split.
+TEST(TouchingSheetSplitter, OneSheetStaysWhole)
+{
+  const unsigned seed = std::random_device{}();
+  for (const double thickness : { 3.0, 7.0 })
+  {
+    const Scene scene = MakeScene({ 15.0 }, thickness, 4.0, seed);
+    const auto  split = itk::SplitTouchingSheets(scene.Values, scene.Piece, 1.0, 200);
+    EXPECT_EQ(split.Sheets, 1u) << "seed " << seed << ", thickness " << thickness;
+    for (size_t v = 0; v < scene.Truth.size(); ++v)
+    {
+      ASSERT_EQ(split.Labels->GetBufferPointer()[v], scene.Truth[v] != 0 ? 1 : 0);
+    }
+  }
+}
+
+// The other sheets' voxels and their blurred faces hold the background; this sheet's and
+// the air elsewhere keep their values.
+TEST(TouchingSheetSplitter, OtherSheetsAreBlanked)
+{
+  const Scene scene = MakeScene({ 10.0, 20.0 }, 3.0, 0.0, 7);
+  auto        labels = itk::Image<uint16_t, 3>::New();
+  labels->CopyInformation(scene.Values);
+  labels->SetRegions(scene.Values->GetBufferedRegion());
+  labels->Allocate();
+  for (size_t v = 0; v < scene.Truth.size(); ++v)
+  {
+    labels->GetBufferPointer()[v] = static_cast<uint16_t>(scene.Truth[v]);
+  }
+  EXPECT_THROW(itk::BlankOtherSheets(scene.Values, nullptr, 1), itk::ExceptionObject);
+  const auto blanked = itk::BlankOtherSheets(scene.Values, labels, 1);
+  const auto size = scene.Values->GetBufferedRegion().GetSize();
+  for (size_t v = 0; v < scene.Truth.size(); ++v)
+  {
+    const float before = scene.Values->GetBufferPointer()[v], after = blanked->GetBufferPointer()[v];
+    const long  y = static_cast<long>((v / size[0]) % size[1]);
+    if (scene.Truth[v] == 2)
+    {
+      ASSERT_LT(std::abs(after), 0.2f) << "voxel " << v; // the background: air, about 0
+    }
+    else if (scene.Truth[v] == 1 || std::abs(y - 20) > 3)
+    {
+      ASSERT_EQ(after, before) << "voxel " << v;
+    }
+  }
+}
