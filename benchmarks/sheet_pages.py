@@ -128,7 +128,7 @@ def spiral_roll(centre, inner_radius, pitch, turns, width, thickness, inked_face
 def write_text(sheet, rng, letter_height):
     """Two or three lines of words laid out inside the sheet with a border; sets sheet.ink
     (an image over (s, w), TEXTURE_PIXEL voxels a pixel) and sheet.lines."""
-    from PIL import Image, ImageDraw, ImageFont
+    from PIL import ImageFont
     font_path = os.path.join(stress.FONT_DIR, str(rng.choice(stress.FONTS)))
     border = max(3.0, 1.25 * sheet.thickness + 2.0)
     length, width = sheet.s[-1] - 2 * border, sheet.w[-1] - 2 * border
@@ -142,7 +142,6 @@ def write_text(sheet, rng, letter_height):
     font = ImageFont.truetype(font_path, 100)
     cap = font.getbbox("H")
     font = ImageFont.truetype(font_path, max(6, int(round(100 * px / (cap[3] - cap[1])))))
-    cap = font.getbbox("H")
     limit = length / stress.TEXTURE_PIXEL
     lines = []
     for _ in range(lines_wanted):
@@ -156,15 +155,7 @@ def write_text(sheet, rng, letter_height):
             while font.getlength(words[0]) > limit and len(words[0]) > 2:
                 words[0] = words[0][:-1]
         lines.append(" ".join(words))
-    line_px = 1.6 * px
-    block_w = max(font.getlength(line) for line in lines)
-    block_h = (len(lines) - 1) * line_px + 1.3 * px
-    pad = 4
-    img = Image.new("L", (int(math.ceil(block_w)) + 2 * pad, int(math.ceil(block_h)) + 2 * pad), 0)
-    draw = ImageDraw.Draw(img)
-    for i, line in enumerate(lines):
-        draw.text((pad, pad + i * line_px - cap[1] + 0.15 * px), line, font=font, fill=255)
-    arr = np.asarray(img, dtype=np.float32) / 255.0
+    arr = stress.draw_text_block(font, lines, px).astype(np.float32) / 255.0
     block_s, block_wv = arr.shape[1] * stress.TEXTURE_PIXEL, arr.shape[0] * stress.TEXTURE_PIXEL
     s0 = border + rng.uniform(0.0, max(0.0, length - block_s))
     w0 = border + rng.uniform(0.0, max(0.0, width - block_wv))

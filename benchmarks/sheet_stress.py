@@ -569,10 +569,26 @@ class Ink:
         return ndimage.map_coordinates(self.image, [row, col], order=1, cval=0.0)
 
 
+def draw_text_block(font, lines, px):
+    """Lines of text drawn white on black (uint8 array), capitals px pixels tall, 1.6 of
+    them apart, in a margin of 4 pixels."""
+    from PIL import Image, ImageDraw
+    cap = font.getbbox("H")
+    line_px = 1.6 * px
+    block_w = max(font.getlength(line) for line in lines)
+    block_h = (len(lines) - 1) * line_px + 1.3 * px
+    pad = 4
+    img = Image.new("L", (int(math.ceil(block_w)) + 2 * pad, int(math.ceil(block_h)) + 2 * pad), 0)
+    draw = ImageDraw.Draw(img)
+    for i, line in enumerate(lines):
+        draw.text((pad, pad + i * line_px - cap[1] + 0.15 * px), line, font=font, fill=255)
+    return np.asarray(img)
+
+
 def render_text(p, roll, fov_ok):
     """Lay out 2-4 lines of random words in the longest stretch of the sheet inside the field
     of view; returns (Ink, lines, layout facts)."""
-    from PIL import Image, ImageDraw, ImageFont
+    from PIL import ImageFont
     rng = stream(p["seed"], "words")
     font_path = os.path.join(FONT_DIR, p["font"])
     height = p["letter_height"]
@@ -613,7 +629,6 @@ def render_text(p, roll, fov_ok):
     font = ImageFont.truetype(font_path, 100)
     cap = font.getbbox("H")
     font = ImageFont.truetype(font_path, max(6, int(round(100 * px / (cap[3] - cap[1])))))
-    cap = font.getbbox("H")
     max_len_px = min(avail_s, rng.uniform(25.0, 60.0) * height) / TEXTURE_PIXEL
     lines = []
     for _ in range(lines_wanted):
@@ -628,16 +643,7 @@ def render_text(p, roll, fov_ok):
             else:
                 words[0] = words[0][:-1]
         lines.append(" ".join(words))
-    widths = [font.getlength(line) for line in lines]
-    block_w = max(widths)
-    line_px = 1.6 * px
-    block_h = (len(lines) - 1) * line_px + 1.3 * px
-    pad = 4
-    img = Image.new("L", (int(math.ceil(block_w)) + 2 * pad, int(math.ceil(block_h)) + 2 * pad), 0)
-    draw = ImageDraw.Draw(img)
-    for i, line in enumerate(lines):
-        draw.text((pad, pad + i * line_px - cap[1] + 0.15 * px), line, font=font, fill=255)
-    arr = np.asarray(img)
+    arr = draw_text_block(font, lines, px)
     # Place the block at random inside the usable stretch and width.
     block_s = arr.shape[1] * TEXTURE_PIXEL
     block_wv = arr.shape[0] * TEXTURE_PIXEL

@@ -18,6 +18,7 @@
 // virtual-unwrap segment VOLUME -o DIR: sheet mask, mid-surface mesh and a JSON summary.
 #include "vuCommands.h"
 #include "vuReaderOptions.h"
+#include "vuSheetsJson.h"
 
 #include "itkCTVolumeReader.h"
 
@@ -45,6 +46,8 @@ struct SegmentOptions
   double        ChordError{ 0.1 };
   unsigned long MinimumComponent{ 100 };
   unsigned int  Closing{ 0 };
+  bool          EverySheet{ false };
+  std::string   MinimumSheetArea{ "auto" };
   ReaderOptions Reader;
 };
 
@@ -128,8 +131,16 @@ RunSegment(const SegmentOptions & options)
   surface->SetSpacingAlongSheet(spacing[0]);
   surface->SetSpacingAlongAxis(spacing[1]);
   surface->SetChordErrorFraction(options.ChordError);
+  double minimumArea = 0.0;
+  if (ParseAutoOrNumber(options.MinimumSheetArea, "--minimum-sheet-area", minimumArea) && !(minimumArea > 0.0))
+  {
+    throw UsageError("--minimum-sheet-area must be auto or an area in mm^2 above 0");
+  }
+  surface->SetEverySheet(options.EverySheet);
+  surface->SetMinimumSheetArea(minimumArea);
   surface->Update();
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const unsigned int sheets = surface->GetNumberOfSheets();
+  const double       seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   // Everything is written into a staging folder beside the output, moved into place at the
   // end: an error or a kill leaves the output as it was.
@@ -147,12 +158,29 @@ RunSegment(const SegmentOptions & options)
   maskWriter->SetFileName((directory / "mask.mha").string());
   maskWriter->UseCompressionOn();
   maskWriter->Update();
-  for (const char * name : { "surface.obj", "surface.vtk" })
+  // One sheet: its mesh in the output folder; several: a folder sheet-NN for each, and the
+  // sheet of every voxel of the mask.
+  for (unsigned int i = 0; i < sheets; ++i)
   {
-    auto meshWriter = itk::MeshFileWriter<MeshType>::New();
-    meshWriter->SetInput(surface->GetOutput());
-    meshWriter->SetFileName((directory / name).string());
-    meshWriter->Update();
+    char name[16];
+    std::snprintf(name, sizeof(name), "sheet-%02u", i + 1);
+    const std::filesystem::path folder = sheets > 1 ? directory / name : directory;
+    std::filesystem::create_directories(folder);
+    for (const char * file : { "surface.obj", "surface.vtk" })
+    {
+      auto meshWriter = itk::MeshFileWriter<MeshType>::New();
+      meshWriter->SetInput(surface->GetSheetOutput(i));
+      meshWriter->SetFileName((folder / file).string());
+      meshWriter->Update();
+    }
+  }
+  if (sheets > 1)
+  {
+    auto labelWriter = itk::ImageFileWriter<itk::Image<uint16_t, 3>>::New();
+    labelWriter->SetInput(surface->GetSheetLabelImage());
+    labelWriter->SetFileName((directory / "sheets.mha").string());
+    labelWriter->UseCompressionOn();
+    labelWriter->Update();
   }
 
   const itk::SheetMesh &             mesh = surface->GetSheetMesh();
@@ -178,7 +206,22 @@ RunSegment(const SegmentOptions & options)
                         "point (row r, column c) at index r * columns + c; roll: normals towards the roll axis, "
                         "general: normals dP/dw x dP/ds";
   json["seconds"] = seconds;
+  if (options.EverySheet)
+  {
+    json["sheets"] = nlohmann::json::array();
+    for (unsigned int i = 0; i < sheets; ++i)
+    {
+      json["sheets"].push_back(SheetEntryJson(*surface, i));
+    }
+    json["dropped"] = DroppedJson(*surface);
+  }
   EmitJson(json, (directory / "segment.json").string());
+  RemoveOtherLayout(options.Output, sheets > 1, { "surface.obj", "surface.vtk" });
+  if (sheets <= 1)
+  {
+    std::error_code error;
+    std::filesystem::remove(std::filesystem::path(options.Output) / "sheets.mha", error);
+  }
   staging.Commit();
   std::cout << "segment: " << itk::ToString(report.Method) << ", threshold " << segmentation->GetThreshold() << ", "
             << mesh.GetNumberOfPoints() << " points, " << mesh.GetNumberOfTriangles() << " triangles -> "
@@ -278,6 +321,17 @@ RegisterSegmentCommand(CLI::App & app)
   command->add_option("--min-component", options.MinimumComponent, "remove components smaller than this (voxels)")
     ->capture_default_str();
   command->add_option("--closing", options.Closing, "binary closing radius in voxels (0: off)")->capture_default_str();
+  command->add_flag("--every-sheet",
+                    options.EverySheet,
+                    "mesh every sheet (separate pieces, and sheets that touch split between them), each into "
+                    "OUTDIR/sheet-NN when there are several, with sheets.mha (the sheet of every voxel); by default "
+                    "the largest only");
+  command
+    ->add_option("--minimum-sheet-area",
+                 options.MinimumSheetArea,
+                 "with --every-sheet: pieces below this area (mm^2) are counted, not meshed; auto: 1 % of the largest "
+                 "sheet's area and at least 400 voxels")
+    ->capture_default_str();
   AddReaderOptions(*command, options.Reader);
   command->callback([] { RunSegment(options); });
 }

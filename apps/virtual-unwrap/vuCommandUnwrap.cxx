@@ -22,6 +22,7 @@
 #include "vuProgress.h"
 #include "vuReaderOptions.h"
 #include "vuSheetMeshIO.h"
+#include "vuSheetsJson.h"
 #include "vuSimulationOptions.h"
 #include "vuTextureOutput.h"
 
@@ -876,63 +877,6 @@ UnwrapSheet(const SheetContext & context,
   return report;
 }
 
-// A sheet's entry in the list of sheets found: size, where it lies, how sure the trace is.
-nlohmann::json
-SheetEntryJson(const SurfaceFilterType & surfaceFilter, unsigned int sheet)
-{
-  const itk::SheetSummary & summary = surfaceFilter.GetSheetSummary(sheet);
-  return { { "sheet", sheet + 1 },
-           { "voxels", summary.Voxels },
-           { "area_mm2", summary.Area },
-           { "bounds_mm",
-             { { summary.BoundsMinimum[0], summary.BoundsMinimum[1], summary.BoundsMinimum[2] },
-               { summary.BoundsMaximum[0], summary.BoundsMaximum[1], summary.BoundsMaximum[2] } } },
-           { "pieces", summary.Pieces },
-           { "confidence", summary.Confidence },
-           { "method", itk::ToString(surfaceFilter.GetSheetReport(sheet).Method) } };
-}
-
-nlohmann::json
-DroppedJson(const SurfaceFilterType & surfaceFilter)
-{
-  const itk::DroppedSheetPieces & dropped = surfaceFilter.GetDroppedPieces();
-  nlohmann::json                  untraceable = nlohmann::json::array();
-  for (const auto & piece : dropped.NotTraced)
-  {
-    untraceable.push_back({ { "voxels", piece.Voxels }, { "area_mm2", piece.Area }, { "reason", piece.Reason } });
-  }
-  return { { "too_small",
-             { { "pieces", dropped.TooSmall },
-               { "voxels", dropped.TooSmallVoxels },
-               { "minimum_area_mm2", surfaceFilter.GetMinimumSheetAreaUsed() } } },
-           { "untraceable", untraceable } };
-}
-
-// An output folder written before with the other layout (one sheet's files, or a folder
-// per sheet) loses those files, so that nothing stale is mistaken for this run's results.
-void
-RemoveOtherLayout(const fs::path & output, bool folderPerSheet)
-{
-  std::error_code error;
-  if (!fs::is_directory(output, error))
-  {
-    return;
-  }
-  for (const auto & entry : fs::directory_iterator(output, error))
-  {
-    const std::string name = entry.path().filename().string();
-    const bool        sheetFolder = name.size() == 8 && name.rfind("sheet-", 0) == 0 &&
-                             std::isdigit(static_cast<unsigned char>(name[6])) &&
-                             std::isdigit(static_cast<unsigned char>(name[7])) && entry.is_directory();
-    const bool oneSheetFile =
-      std::find(std::begin(OneSheetFiles), std::end(OneSheetFiles), name) != std::end(OneSheetFiles);
-    if ((folderPerSheet && oneSheetFile) || sheetFolder)
-    {
-      fs::remove_all(entry.path(), error);
-    }
-  }
-}
-
 // The sheets to unwrap: every one found, or the one picked by number or seed point.
 std::vector<unsigned int>
 PickSheets(const CheckedOptions & checked, const SurfaceFilterType & surfaceFilter)
@@ -1067,7 +1011,8 @@ RunUnwrap(UnwrapOptions & options)
   report["seconds"] = clock.Seconds();
   report["peak_memory_mib"] = PeakMemoryMiB();
   WriteTextFileAtomically((output.Path() / "report.json").string(), report.dump(2) + "\n");
-  RemoveOtherLayout(fs::path(options.Output), sheets.size() > 1);
+  RemoveOtherLayout(
+    fs::path(options.Output), sheets.size() > 1, { std::begin(OneSheetFiles), std::end(OneSheetFiles) });
   output.Commit();
   progress.Finish(options.Output, report);
 }

@@ -19,7 +19,9 @@
 
 #include "vuCommands.h"
 
+#include <algorithm>
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -412,4 +414,30 @@ RequireMemory(std::uintmax_t bytes, const std::string & what)
                      DescribeBytes(cap > inUse ? cap - inUse : 0));
   }
 }
+// An output folder written before with the other layout (one sheet's files, or a folder
+// per sheet) loses those files, so that nothing stale is mistaken for this run's results.
+void
+RemoveOtherLayout(const std::filesystem::path &    output,
+                  bool                             folderPerSheet,
+                  const std::vector<std::string> & oneSheetFiles)
+{
+  std::error_code error;
+  if (!std::filesystem::is_directory(output, error))
+  {
+    return;
+  }
+  for (const auto & entry : std::filesystem::directory_iterator(output, error))
+  {
+    const std::string name = entry.path().filename().string();
+    const bool        sheetFolder = name.size() == 8 && name.rfind("sheet-", 0) == 0 &&
+                             std::isdigit(static_cast<unsigned char>(name[6])) &&
+                             std::isdigit(static_cast<unsigned char>(name[7])) && entry.is_directory();
+    const bool oneSheetFile = std::find(oneSheetFiles.begin(), oneSheetFiles.end(), name) != oneSheetFiles.end();
+    if ((folderPerSheet && oneSheetFile) || sheetFolder)
+    {
+      std::filesystem::remove_all(entry.path(), error);
+    }
+  }
+}
+
 } // namespace vu

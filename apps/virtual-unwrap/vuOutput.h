@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace vu {
 /** Writes text to path atomically: to a temporary name beside it, then renamed, so a
@@ -110,6 +111,14 @@ void
 SetActivity(const std::string & activity);
 const std::string &
 GetActivity();
+/** An output folder written before with the other layout (one sheet's files, named in
+ * oneSheetFiles, or a folder sheet-NN per sheet) loses those files, so that nothing stale
+ * is mistaken for this run's results. */
+void
+RemoveOtherLayout(const std::filesystem::path &    output,
+                  bool                             folderPerSheet,
+                  const std::vector<std::string> & oneSheetFiles);
+
 } // namespace vu
 
 #endif
