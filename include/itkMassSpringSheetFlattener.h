@@ -198,9 +198,11 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
  *    solver (in-plane spring projection) until the residual force is below
  *    RelaxationTolerance.
  * The flat mesh (same points, same triangles, z = 0) is expressed in the plane: x along
- * the sheet's longest extent (on grid meshes pointing towards increasing columns, i.e.
- * away from the sheet's start), triangles counter-clockwise seen from +z (the side the 3D
- * triangles' normals face), the bounding box starting at (0, 0).
+ * the sheet (on grid meshes the mean direction of the rows, towards increasing columns,
+ * i.e. away from the sheet's start, so that what was written along the sheet runs along
+ * x whatever the outline's shape; on other meshes the longest extent), triangles
+ * counter-clockwise seen from +z (the side the 3D triangles' normals face), the bounding
+ * box starting at (0, 0).
  *
  * Modelling no more than the scene needs: on grid meshes with more than CoarseParticles
  * particles the phases run on a coarser grid (every n-th row and column); the flat

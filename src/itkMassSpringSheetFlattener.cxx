@@ -369,8 +369,41 @@ ToPlane(const std::vector<double> & x, const Vec3 & origin, const Vec3 & u, cons
   return planar;
 }
 
-// Final frame of a flat mesh: x along the longest extent (grid meshes: in the direction
-// of increasing column), triangles counter-clockwise, bounding box from (0, 0).
+// The mean direction of a flat grid mesh's rows (from each point to the next column's),
+// in the plane; zero when the grid has no two neighbouring columns.
+Vec3
+MeanColumnDirection(const SheetMesh & flat)
+{
+  const size_t          rows = static_cast<size_t>(flat.GridRows);
+  const size_t          columns = static_cast<size_t>(flat.GridColumns);
+  std::vector<int64_t>  at(rows * columns, -1);
+  for (size_t i = 0; i < flat.GetNumberOfPoints(); ++i)
+  {
+    at[static_cast<size_t>(flat.GridIndex[2 * i]) * columns + static_cast<size_t>(flat.GridIndex[2 * i + 1])] =
+      static_cast<int64_t>(i);
+  }
+  Vec3 sum = Vec3::Zero();
+  for (size_t r = 0; r < rows; ++r)
+  {
+    for (size_t c = 0; c + 1 < columns; ++c)
+    {
+      const int64_t a = at[r * columns + c];
+      const int64_t b = at[r * columns + c + 1];
+      if (a >= 0 && b >= 0)
+      {
+        sum += PointOf(flat.Points, static_cast<size_t>(b)) - PointOf(flat.Points, static_cast<size_t>(a));
+      }
+    }
+  }
+  sum.z() = 0.0;
+  return sum;
+}
+
+// Final frame of a flat mesh: x along the sheet, triangles counter-clockwise, bounding box
+// from (0, 0). On a grid mesh "along the sheet" is the mean direction of its rows (columns
+// increasing along +x), so that what was written along the sheet (a roll's lines of text,
+// a page's) runs along the image's rows whatever the flat outline's shape; on any other
+// mesh it is the longest extent.
 void
 NormaliseFlatFrame(SheetMesh & flat)
 {
@@ -378,24 +411,19 @@ NormaliseFlatFrame(SheetMesh & flat)
   const Eigen::Matrix3d axes = PrincipalAxes(flat.Points, centroid);
   Vec3                  u = axes.col(0);
   u.z() = 0.0;
+  if (flat.IsGridStructured())
+  {
+    const Vec3 along = MeanColumnDirection(flat);
+    if (along.norm() > 1e-12)
+    {
+      u = along;
+    }
+  }
   if (u.norm() < 1e-12)
   {
     u = Vec3::UnitX();
   }
   u.normalize();
-  if (flat.IsGridStructured())
-  {
-    // Grid columns run along the sheet from its inner end: let them run along +x.
-    double correlation = 0.0;
-    for (size_t i = 0; i < flat.GetNumberOfPoints(); ++i)
-    {
-      correlation += (PointOf(flat.Points, i) - centroid).dot(u) * flat.GridIndex[2 * i + 1];
-    }
-    if (correlation < 0.0)
-    {
-      u = -u;
-    }
-  }
   Vec3                v(-u.y(), u.x(), 0.0);
   std::vector<double> p = ToPlane(flat.Points, centroid, u, v);
   double              signedArea = 0.0;
