@@ -59,6 +59,27 @@ bash "${HERE}/texture-stage.sh" "${BUILD_DIR}" 10 >"${OUT}/texture-stage.md"
 step "whole pipeline on one and two threads, 182 M-voxel phantom, 3 rounds"
 bash "${HERE}/pipeline-threads.sh" "${BUILD_DIR}" 3 >"${OUT}/pipeline-threads.md"
 
+step "pipeline profile of the demo (standard phantom, DICOM series, with its ground truth)"
+"${BIN}/virtual-unwrap" phantom standard -o "${OUT}/demo.tmp/phantom" --format dicom >/dev/null
+"${BIN}/virtual-unwrap" unwrap "${OUT}/demo.tmp/phantom/volume" -o "${OUT}/demo.tmp/unwrapped" \
+  --ground-truth "${OUT}/demo.tmp/phantom" -q
+cp "${OUT}/demo.tmp/unwrapped/report.json" "${OUT}/demo-report.json"
+rm -rf "${OUT}/demo.tmp"
+
+if command -v xvfb-run >/dev/null && [ -x "${BIN}/virtual-unwrap-workbench" ]; then
+  step "workbench frame rate under Xvfb (software OpenGL), 100k and 1M particles"
+  : >"${OUT}/workbench-frames.txt"
+  for case in "100000 symplectic-euler" "100000 implicit-euler" "1000000 symplectic-euler" "1000000 implicit-euler"; do
+    set -- ${case}
+    echo "particles=$1 integrator=$2" >>"${OUT}/workbench-frames.txt"
+    LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s "-screen 0 1920x1200x24" "${BIN}/virtual-unwrap-workbench" \
+      --benchmark-frames "$1" --seconds 10 --integrator "$2" >>"${OUT}/workbench-frames.txt" 2>&1
+  done
+  echo "particles=1000000 integrator=none" >>"${OUT}/workbench-frames.txt"
+  LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s "-screen 0 1920x1200x24" "${BIN}/virtual-unwrap-workbench" \
+    --benchmark-frames 1000000 --seconds 10 --render-only >>"${OUT}/workbench-frames.txt" 2>&1
+fi
+
 step "enough model"
 /usr/bin/python3 "${HERE}/enough_model.py" --build "${BUILD_DIR}" --csv "${OUT}/enough-model.csv" >/dev/null
 

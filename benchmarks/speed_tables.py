@@ -8,6 +8,7 @@ explicit step at 1M particles, the texture stage, the pipeline on two threads), 
 table of the page in its order.
 """
 import csv
+import json
 import os
 import re
 import sys
@@ -146,8 +147,31 @@ def main():
                       f"{float(r['texture_ncc']):.3f}", f"{float(r['character_error_rate']):.2f}",
                       f"{100 * float(r['edge_strain_p95']):.2f}%", r["flipped_triangles"],
                       f"{float(r['flatten_seconds']):.2f}", f"{float(r['unwrap_seconds']):.2f}"] for r in enough]))
+    demo = os.path.join(directory, "demo-report.json")
+    if os.path.exists(demo):
+        report = json.load(open(demo))
+        print("\n## 5. Pipeline profile of the demo\n")
+        print(table(["stage", "seconds", "peak memory (MiB)"],
+                    [[x["stage"], f"{x['seconds']:.2f}", f"{x.get('peak_memory_mib', float('nan')):.0f}"]
+                     for x in report["stages"]]))
+        legibility = report.get("legibility", {})
+        print(f"\nOCR CER {legibility.get('character_error_rate', float('nan')):.3f}, "
+              f"texture NCC {legibility.get('texture_ncc', float('nan')):.3f}, {report['seconds']:.2f} s in all")
     print("\n## 6. Texture stage of unwrap, 30 mm phantom\n")
     print(texture)
+    frames = os.path.join(directory, "workbench-frames.txt")
+    if os.path.exists(frames):
+        print("\n## 7. Workbench frame rate\n")
+        body = []
+        for chunk in open(frames).read().split("particles=")[1:]:
+            start, end = chunk.find("{"), chunk.rfind("}")
+            if start < 0 or end < start:
+                body.append([chunk.split()[0], chunk.split()[1].split("=")[1], "failed", "-"])
+                continue
+            r = json.loads(chunk[start:end + 1])
+            body.append([f"{r['particles']} ({r['triangles']})", r["integrator"], f"{r['frames_per_second']:.1f}",
+                         f"{r['steps_per_second']:.3g}" if "none" not in r["integrator"] else "-"])
+        print(table(["particles (triangles)", "simulation", "rendered frames/s", "simulation steps/s"], body))
     print("\n## 8. Whole pipeline on one and two threads\n")
     print(pipeline)
 
