@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "itkMassSpringSheetFlattener.h"
 #include "vuCoarseGrid.h"
+#include "vuFlatFrame.h"
 
 #include "itkMacro.h"
 #include "itk_eigen.h"
@@ -87,17 +88,14 @@ SheetLockedEdgeFromString(const std::string & name)
 namespace {
 using Clock = std::chrono::steady_clock;
 using Vec3 = Eigen::Vector3d;
+using FlatFrame::PointOf;
+using FlatFrame::PrincipalAxes;
+using FlatFrame::ToPlane;
 
 double
 Seconds(Clock::time_point since)
 {
   return std::chrono::duration<double>(Clock::now() - since).count();
-}
-
-Vec3
-PointOf(const std::vector<double> & x, size_t i)
-{
-  return Vec3(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
 }
 
 uint64_t
@@ -106,31 +104,6 @@ EdgeKey(uint32_t a, uint32_t b)
   return a < b ? (uint64_t{ a } << 32) | b : (uint64_t{ b } << 32) | a;
 }
 
-// Principal axes of a point cloud: columns sorted by decreasing variance.
-Eigen::Matrix3d
-PrincipalAxes(const std::vector<double> & x, Vec3 & centroid)
-{
-  const size_t n = x.size() / 3;
-  centroid.setZero();
-  for (size_t i = 0; i < n; ++i)
-  {
-    centroid += PointOf(x, i);
-  }
-  centroid /= static_cast<double>(n);
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  for (size_t i = 0; i < n; ++i)
-  {
-    const Vec3 d = PointOf(x, i) - centroid;
-    covariance += d * d.transpose();
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
-  Eigen::Matrix3d                                axes;
-  for (int k = 0; k < 3; ++k)
-  {
-    axes.col(k) = eigen.eigenvectors().col(2 - k);
-  }
-  return axes;
-}
 } // namespace
 
 void
@@ -352,107 +325,6 @@ RunRelaxation(MassSpringSystem &                             system,
   }
   phase.Seconds = Seconds(start);
   return phase;
-}
-
-// Lays the particles on the plane through 'origin' with in-plane axes u, v: z = 0.
-std::vector<double>
-ToPlane(const std::vector<double> & x, const Vec3 & origin, const Vec3 & u, const Vec3 & v)
-{
-  std::vector<double> planar(x.size());
-  for (size_t i = 0; i < x.size() / 3; ++i)
-  {
-    const Vec3 d = PointOf(x, i) - origin;
-    planar[3 * i] = d.dot(u);
-    planar[3 * i + 1] = d.dot(v);
-    planar[3 * i + 2] = 0.0;
-  }
-  return planar;
-}
-
-// The mean direction of a flat grid mesh's rows (from each point to the next column's),
-// in the plane; zero when the grid has no two neighbouring columns.
-Vec3
-MeanColumnDirection(const SheetMesh & flat)
-{
-  const size_t          rows = static_cast<size_t>(flat.GridRows);
-  const size_t          columns = static_cast<size_t>(flat.GridColumns);
-  std::vector<int64_t>  at(rows * columns, -1);
-  for (size_t i = 0; i < flat.GetNumberOfPoints(); ++i)
-  {
-    at[static_cast<size_t>(flat.GridIndex[2 * i]) * columns + static_cast<size_t>(flat.GridIndex[2 * i + 1])] =
-      static_cast<int64_t>(i);
-  }
-  Vec3 sum = Vec3::Zero();
-  for (size_t r = 0; r < rows; ++r)
-  {
-    for (size_t c = 0; c + 1 < columns; ++c)
-    {
-      const int64_t a = at[r * columns + c];
-      const int64_t b = at[r * columns + c + 1];
-      if (a >= 0 && b >= 0)
-      {
-        sum += PointOf(flat.Points, static_cast<size_t>(b)) - PointOf(flat.Points, static_cast<size_t>(a));
-      }
-    }
-  }
-  sum.z() = 0.0;
-  return sum;
-}
-
-// Final frame of a flat mesh: x along the sheet, triangles counter-clockwise, bounding box
-// from (0, 0). On a grid mesh "along the sheet" is the mean direction of its rows (columns
-// increasing along +x), so that what was written along the sheet (a roll's lines of text,
-// a page's) runs along the image's rows whatever the flat outline's shape; on any other
-// mesh it is the longest extent.
-void
-NormaliseFlatFrame(SheetMesh & flat)
-{
-  Vec3                  centroid;
-  const Eigen::Matrix3d axes = PrincipalAxes(flat.Points, centroid);
-  Vec3                  u = axes.col(0);
-  u.z() = 0.0;
-  if (flat.IsGridStructured())
-  {
-    const Vec3 along = MeanColumnDirection(flat);
-    if (along.norm() > 1e-12)
-    {
-      u = along;
-    }
-  }
-  if (u.norm() < 1e-12)
-  {
-    u = Vec3::UnitX();
-  }
-  u.normalize();
-  Vec3                v(-u.y(), u.x(), 0.0);
-  std::vector<double> p = ToPlane(flat.Points, centroid, u, v);
-  double              signedArea = 0.0;
-  for (size_t t = 0; t < flat.GetNumberOfTriangles(); ++t)
-  {
-    const double * a = &p[3 * flat.Triangles[3 * t]];
-    const double * b = &p[3 * flat.Triangles[3 * t + 1]];
-    const double * c = &p[3 * flat.Triangles[3 * t + 2]];
-    signedArea += (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-  }
-  if (signedArea < 0.0)
-  {
-    for (size_t i = 0; i < p.size() / 3; ++i)
-    {
-      p[3 * i + 1] = -p[3 * i + 1];
-    }
-  }
-  double lo[2] = { std::numeric_limits<double>::max(), std::numeric_limits<double>::max() };
-  for (size_t i = 0; i < p.size() / 3; ++i)
-  {
-    lo[0] = std::min(lo[0], p[3 * i]);
-    lo[1] = std::min(lo[1], p[3 * i + 1]);
-  }
-  for (size_t i = 0; i < p.size() / 3; ++i)
-  {
-    p[3 * i] -= lo[0];
-    p[3 * i + 1] -= lo[1];
-  }
-  flat.Points = std::move(p);
 }
 
 // The particles of a grid mesh held by the unroll phase: the end column of each row.
@@ -784,7 +656,7 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
     m_Report.SpringEvaluations += fine.GetNumberOfForceEvaluations() * fine.GetNumberOfSprings();
     flat.Points = fine.GetPositions();
   }
-  NormaliseFlatFrame(flat);
+  FlatFrame::Normalise(flat);
   m_Report.Seconds = Seconds(start);
   return flat;
 }
