@@ -175,6 +175,12 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
   double   FallTime{ 0.0 };
   uint64_t SpringEvaluations{ 0 };
   double   Seconds{ 0.0 };
+  /** Triangles of the flat mesh turned over against the others (where the sheet lies folded
+   * onto itself, so that its texture does not read there). */
+  size_t FlippedTriangles{ 0 };
+  /** What a caller should not miss: phases stopped at their step limit before they
+   * converged, triangles turned over; empty when the flattening converged cleanly. */
+  std::vector<std::string> Warnings;
 };
 
 /** \class MassSpringSheetFlattener

@@ -29,6 +29,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <sstream>
 #include <unordered_set>
 
 namespace itk {
@@ -657,6 +658,25 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
     flat.Points = fine.GetPositions();
   }
   FlatFrame::Normalise(flat);
+  for (const auto & phase : m_Report.Phases)
+  {
+    if (phase.StopReason != "converged")
+    {
+      std::ostringstream text;
+      text << "the " << ToString(phase.Name) << " phase stopped at its " << phase.StopReason << " (" << phase.Steps
+           << " steps) before it converged";
+      m_Report.Warnings.push_back(text.str());
+    }
+  }
+  m_Report.FlippedTriangles = FlatFrame::TurnedOverTriangles(flat);
+  if (m_Report.FlippedTriangles > 0)
+  {
+    std::ostringstream text;
+    text << m_Report.FlippedTriangles << " of " << flat.GetNumberOfTriangles()
+         << " triangles of the flat mesh are turned over: the sheet lies folded onto itself there, and its "
+            "texture does not read there";
+    m_Report.Warnings.push_back(text.str());
+  }
   m_Report.Seconds = Seconds(start);
   return flat;
 }

@@ -136,5 +136,19 @@ Normalise(SheetMesh & flat)
   }
   flat.Points = std::move(p);
 }
+
+size_t
+TurnedOverTriangles(const SheetMesh & flat)
+{
+  size_t turned = 0;
+  for (size_t t = 0; t < flat.GetNumberOfTriangles(); ++t)
+  {
+    const Vec3 a = PointOf(flat.Points, flat.Triangles[3 * t]);
+    const Vec3 b = PointOf(flat.Points, flat.Triangles[3 * t + 1]);
+    const Vec3 c = PointOf(flat.Points, flat.Triangles[3 * t + 2]);
+    turned += (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x()) < 0.0 ? 1 : 0;
+  }
+  return turned;
+}
 } // namespace FlatFrame
 } // namespace itk

@@ -57,6 +57,11 @@ ToPlane(const std::vector<double> & x,
  * outline's shape; on any other mesh it is the longest extent. */
 void
 Normalise(SheetMesh & flat);
+
+/** The triangles of a flat mesh in its final frame that are turned over (clockwise seen
+ * from +z, against the counter-clockwise majority). */
+size_t
+TurnedOverTriangles(const SheetMesh & flat);
 } // namespace FlatFrame
 } // namespace itk
 

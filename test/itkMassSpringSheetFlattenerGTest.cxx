@@ -132,6 +132,41 @@ TEST(MassSpringSheetFlattener, TightInnerCurlOfALongRollDoesNotFoldOver)
   ExpectDevelopableFlattening(surface, parameters);
 }
 
+// A flattening that did not finish says so: a roll whose unroll phase is stopped after a
+// few steps is dropped onto the plane still rolled, and the report names the phases that
+// stopped at their step limit and counts the triangles turned over, as the distortion
+// measure does; a converged flattening has nothing to say.
+TEST(MassSpringSheetFlattener, AnUnfinishedUnrollIsReportedNotHidden)
+{
+  const itk::SheetMesh          surface = vu::SpiralRollMesh(10.0, 4.0, 3.0, 2.0, 30.0, nullptr);
+  itk::MassSpringSheetFlattener converged;
+  const itk::SheetMesh          good = converged.Flatten(surface);
+  EXPECT_TRUE(converged.GetReport().Warnings.empty());
+  EXPECT_EQ(converged.GetReport().FlippedTriangles, Measure(surface, good)->GetNumberOfFlippedTriangles());
+
+  itk::MassSpringFlatteningParameters parameters;
+  parameters.MaximumStepsPerPhase = 3;
+  itk::MassSpringSheetFlattener unfinished;
+  unfinished.SetParameters(parameters);
+  const itk::SheetMesh flat = unfinished.Flatten(surface);
+  auto                 c = Measure(surface, flat);
+  PrintReport(unfinished, c);
+  const auto & report = unfinished.GetReport();
+  EXPECT_GT(c->GetNumberOfFlippedTriangles(), 0u);
+  EXPECT_EQ(report.FlippedTriangles, c->GetNumberOfFlippedTriangles());
+  bool unrollNamed = false;
+  bool flipsNamed = false;
+  for (const std::string & w : report.Warnings)
+  {
+    std::cout << "warning: " << w << std::endl;
+    unrollNamed |= w.find("unroll phase stopped at its step limit") != std::string::npos;
+    flipsNamed |= w.find(std::to_string(report.FlippedTriangles) + " of " +
+                         std::to_string(surface.GetNumberOfTriangles()) + " triangles") != std::string::npos;
+  }
+  EXPECT_TRUE(unrollNamed);
+  EXPECT_TRUE(flipsNamed);
+}
+
 TEST(MassSpringSheetFlattener, DomeIsFlattenedWithoutFlipsAndItsDistortionReported)
 {
   const itk::SheetMesh                surface = vu::DomeMesh(30.0, 0.6, 25);

@@ -4,7 +4,10 @@
 # stderr, a non-zero exit and no output left behind; the input is never modified.
 # Usage: cmake -DTOOL=<virtual-unwrap> -DWORK=<scratch> -DPRESET=<phantom preset>
 #              -DMAX_CER=<limit> -DMIN_NCC=<limit> [-DEXTRA_ARGS=<unwrap options>]
-#              -P UnwrapCommandTest.cmake
+#              [-DEXPECT_WARNING=<text>] -P UnwrapCommandTest.cmake
+# The flattening warns in report.json only when it did not finish (a phase stopped at its
+# step limit, triangles turned over): never on a clean run; with EXPECT_WARNING, a warning
+# holding that text must be there.
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 
@@ -39,6 +42,29 @@ endif()
 file(READ ${WORK}/out/report.json json)
 string(JSON cer GET "${json}" legibility character_error_rate)
 string(JSON ncc GET "${json}" legibility texture_ncc)
+string(JSON nWarnings LENGTH "${json}" warnings)
+set(flattenWarnings "")
+set(expectedFound FALSE)
+if(nWarnings GREATER 0)
+  math(EXPR last "${nWarnings} - 1")
+  foreach(i RANGE ${last})
+    string(JSON w GET "${json}" warnings ${i})
+    if(w MATCHES "^flatten: ")
+      list(APPEND flattenWarnings "${w}")
+    endif()
+    if(DEFINED EXPECT_WARNING)
+      string(FIND "${w}" "${EXPECT_WARNING}" at)
+      if(at GREATER -1)
+        set(expectedFound TRUE)
+      endif()
+    endif()
+  endforeach()
+endif()
+if(DEFINED EXPECT_WARNING AND NOT expectedFound)
+  message(FATAL_ERROR "${PRESET}: no warning holds '${EXPECT_WARNING}' in report.json")
+elseif(NOT DEFINED EXPECT_WARNING AND flattenWarnings)
+  message(FATAL_ERROR "${PRESET}: the flattening warns on a clean run: ${flattenWarnings}")
+endif()
 string(JSON p95 GET "${json}" distortion edge_strain p95)
 # The automatic texture choices are recorded: side, core subtraction and every candidate's
 # ink contrast.

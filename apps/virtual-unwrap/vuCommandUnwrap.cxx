@@ -863,6 +863,11 @@ UnwrapSheet(const SheetContext & context,
                      { "minimum_curvature_radius_mm", meshReport.MinimumCurvatureRadius },
                      { "trace", TraceJson(meshReport) } };
   report["simulation"] = ToJson(flattening->GetReport());
+  report["warnings"] = nlohmann::json::array();
+  for (const auto & w : flattening->GetReport().Warnings)
+  {
+    report["warnings"].push_back("flatten: " + w);
+  }
   report["distortion"] = DistortionJson(surface, results.Flat);
   const auto textureSize = results.Texture->GetLargestPossibleRegion().GetSize();
   report["texture"] = { { "size", { textureSize[0], textureSize[1] } },
@@ -966,6 +971,10 @@ RunUnwrap(UnwrapOptions & options)
   {
     report.update(UnwrapSheet(context, *surfaceFilter, sheets.front(), output.Path()));
     report["sheet"] = sheets.front() + 1;
+    for (const auto & w : report["warnings"])
+    {
+      warnings.push_back(w.get<std::string>());
+    }
   }
   else
   {
@@ -989,6 +998,10 @@ RunUnwrap(UnwrapOptions & options)
         continue;
       }
       ++unwrapped;
+      for (const auto & w : sheetReport["warnings"])
+      {
+        warnings.push_back("sheet " + std::to_string(i + 1) + ", " + w.get<std::string>());
+      }
       sheetReport["sheet"] = found[i];
       sheetReport["parameters"]["threshold"] = threshold;
       WriteTextFileAtomically((output.Path() / name / "report.json").string(), sheetReport.dump(2) + "\n");

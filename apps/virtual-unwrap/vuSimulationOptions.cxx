@@ -162,6 +162,8 @@ ToJson(const itk::MassSpringFlatteningReport & report)
            { "damping", report.Damping },
            { "spring_evaluations", report.SpringEvaluations },
            { "seconds", report.Seconds },
+           { "flipped_triangles", report.FlippedTriangles },
+           { "warnings", report.Warnings },
            { "phases", phases } };
 }
 
