@@ -51,15 +51,32 @@ PrintReport(const itk::MassSpringSheetFlattener & flattener, const itk::Flatteni
             << c->GetAreaDistortion() << " flipped " << c->GetNumberOfFlippedTriangles() << std::endl;
 }
 
+// Flattens `surface` with `parameters`, measures the flat mesh (into `flat` when given) and
+// prints the report and the measures.
+itk::FlatteningDistortionCalculator::Pointer
+FlattenAndMeasure(itk::MassSpringSheetFlattener &             flattener,
+                  const itk::SheetMesh &                      surface,
+                  const itk::MassSpringFlatteningParameters & parameters,
+                  itk::SheetMesh *                            flat = nullptr)
+{
+  flattener.SetParameters(parameters);
+  const itk::SheetMesh result = flattener.Flatten(surface);
+  auto                 c = Measure(surface, result);
+  PrintReport(flattener, c);
+  if (flat != nullptr)
+  {
+    *flat = result;
+  }
+  return c;
+}
+
 void
 ExpectDevelopableFlattening(const itk::SheetMesh & surface, const itk::MassSpringFlatteningParameters & parameters)
 {
   itk::MassSpringSheetFlattener flattener;
-  flattener.SetParameters(parameters);
-  const itk::SheetMesh flat = flattener.Flatten(surface);
+  itk::SheetMesh                flat;
+  auto                          c = FlattenAndMeasure(flattener, surface, parameters, &flat);
   ASSERT_TRUE(itk::HaveSameTopology(surface, flat));
-  auto c = Measure(surface, flat);
-  PrintReport(flattener, c);
   EXPECT_LE(c->GetEdgeStrainP95(), 0.005);
   EXPECT_LE(c->GetAreaDistortion(), 0.005);
   EXPECT_EQ(c->GetNumberOfFlippedTriangles(), 0u);
@@ -109,10 +126,7 @@ TEST(MassSpringSheetFlattener, CoarseToFineOnALargerRoll)
   itk::MassSpringFlatteningParameters parameters;
   parameters.CoarseParticles = 3000;
   itk::MassSpringSheetFlattener flattener;
-  flattener.SetParameters(parameters);
-  const itk::SheetMesh flat = flattener.Flatten(surface);
-  auto                 c = Measure(surface, flat);
-  PrintReport(flattener, c);
+  auto                          c = FlattenAndMeasure(flattener, surface, parameters);
   EXPECT_GT(flattener.GetReport().CoarseningFactor, 1u);
   EXPECT_LT(flattener.GetReport().SimulatedParticles, surface.GetNumberOfPoints() / 4);
   EXPECT_LE(c->GetEdgeStrainP95(), 0.005);
@@ -147,11 +161,8 @@ TEST(MassSpringSheetFlattener, AnUnfinishedUnrollIsReportedNotHidden)
   itk::MassSpringFlatteningParameters parameters;
   parameters.MaximumStepsPerPhase = 3;
   itk::MassSpringSheetFlattener unfinished;
-  unfinished.SetParameters(parameters);
-  const itk::SheetMesh flat = unfinished.Flatten(surface);
-  auto                 c = Measure(surface, flat);
-  PrintReport(unfinished, c);
-  const auto & report = unfinished.GetReport();
+  auto                          c = FlattenAndMeasure(unfinished, surface, parameters);
+  const auto &                  report = unfinished.GetReport();
   EXPECT_GT(c->GetNumberOfFlippedTriangles(), 0u);
   EXPECT_EQ(report.FlippedTriangles, c->GetNumberOfFlippedTriangles());
   bool unrollNamed = false;
@@ -173,10 +184,7 @@ TEST(MassSpringSheetFlattener, DomeIsFlattenedWithoutFlipsAndItsDistortionReport
   itk::MassSpringFlatteningParameters parameters;
   parameters.LockedEdge = itk::SheetLockedEdgeEnum::None;
   itk::MassSpringSheetFlattener flattener;
-  flattener.SetParameters(parameters);
-  const itk::SheetMesh flat = flattener.Flatten(surface);
-  auto                 c = Measure(surface, flat);
-  PrintReport(flattener, c);
+  auto                          c = FlattenAndMeasure(flattener, surface, parameters);
   EXPECT_EQ(c->GetNumberOfFlippedTriangles(), 0u);
   // A sphere cannot be flattened isometrically: the distortion shows.
   EXPECT_GT(c->GetEdgeStrainMax(), 0.005);
