@@ -315,6 +315,12 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     text << "a piece of " << whole.Summary.Voxels << " voxels holds " << split.Sheets
          << " sheets that touch: split between them";
     warnings.push_back(text.str());
+    // Each split sheet's voxels, counted in one pass over the box.
+    std::vector<SizeValueType> splitVoxels(split.Sheets + 1, 0);
+    for (ImageRegionConstIterator<Image<uint16_t, 3>> it(split.Labels, box); !it.IsAtEnd(); ++it)
+    {
+      ++splitVoxels[std::min<size_t>(it.Get(), split.Sheets)];
+    }
     for (unsigned int k = 1; k <= split.Sheets; ++k)
     {
       std::vector<uint8_t> keep(k + 1, 0);
@@ -323,11 +329,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
       Sheet                    sheet = meshLabels(splitLabels.GetPointer(), keep, sheetWarnings);
       sheet.Split = splitLabels.GetPointer();
       sheet.SplitLabel = static_cast<uint16_t>(k);
-      sheet.Summary.Voxels = 0;
-      for (ImageRegionConstIterator<Image<uint16_t, 3>> it(split.Labels, box); !it.IsAtEnd(); ++it)
-      {
-        sheet.Summary.Voxels += it.Get() == k ? 1 : 0;
-      }
+      sheet.Summary.Voxels = splitVoxels[k];
       sheet.Report.Warnings.insert(sheet.Report.Warnings.begin(), sheetWarnings.begin(), sheetWarnings.end());
       sheets.push_back(std::move(sheet));
     }

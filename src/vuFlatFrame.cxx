@@ -84,6 +84,16 @@ MeanColumnDirection(const SheetMesh & flat)
   sum.z() = 0.0;
   return sum;
 }
+// Twice the signed area of triangle t in the plane z = 0 (x, y of packed points `p`):
+// positive when counter-clockwise seen from +z.
+double
+SignedArea2(const std::vector<double> & p, const SheetMesh & mesh, size_t t)
+{
+  const double * a = &p[3 * mesh.Triangles[3 * t]];
+  const double * b = &p[3 * mesh.Triangles[3 * t + 1]];
+  const double * c = &p[3 * mesh.Triangles[3 * t + 2]];
+  return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+}
 } // namespace
 
 void
@@ -111,10 +121,7 @@ Normalise(SheetMesh & flat)
   double              signedArea = 0.0;
   for (size_t t = 0; t < flat.GetNumberOfTriangles(); ++t)
   {
-    const double * a = &p[3 * flat.Triangles[3 * t]];
-    const double * b = &p[3 * flat.Triangles[3 * t + 1]];
-    const double * c = &p[3 * flat.Triangles[3 * t + 2]];
-    signedArea += (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    signedArea += SignedArea2(p, flat, t);
   }
   if (signedArea < 0.0)
   {
@@ -143,10 +150,7 @@ TurnedOverTriangles(const SheetMesh & flat)
   size_t turned = 0;
   for (size_t t = 0; t < flat.GetNumberOfTriangles(); ++t)
   {
-    const Vec3 a = PointOf(flat.Points, flat.Triangles[3 * t]);
-    const Vec3 b = PointOf(flat.Points, flat.Triangles[3 * t + 1]);
-    const Vec3 c = PointOf(flat.Points, flat.Triangles[3 * t + 2]);
-    turned += (b.x() - a.x()) * (c.y() - a.y()) - (b.y() - a.y()) * (c.x() - a.x()) < 0.0 ? 1 : 0;
+    turned += SignedArea2(flat.Points, flat, t) < 0.0 ? 1 : 0;
   }
   return turned;
 }
