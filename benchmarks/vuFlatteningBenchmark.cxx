@@ -62,6 +62,8 @@ RunMassSpring(std::ostream &                              out,
       {
         status = itk::ToString(phase.Name) + std::string(" ") + phase.StopReason;
       }
+      std::cerr << meshName << " " << method << ": " << itk::ToString(phase.Name) << " " << phase.Steps << " steps, "
+                << phase.Seconds << " s" << std::endl;
     }
     vu::WriteFlatteningCsvRow(out, meshName, surface, flat, method, setting, seconds, status, false);
   }

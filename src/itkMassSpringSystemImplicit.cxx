@@ -17,7 +17,7 @@
  *=========================================================================*/
 // MassSpringSystem's implicit (backward Euler) step and quasi-static relaxation.
 #include "itkMassSpringSystem.h"
-#include "vuBlasThreads.h"
+#include "vuSolverThreads.h"
 #include "vuImplicitSolver.h"
 
 #include "itkMacro.h"
@@ -32,7 +32,7 @@ void
 MassSpringSystem::StepImplicit(bool quasiStatic)
 {
   using SparseMatrix = ImplicitSolver::SparseMatrix;
-  const vu::SingleThreadedBlas blasOnThisThread;
+  const vu::SolverThreads solverThreads;
   if (!m_AdjacencyValid)
   {
     BuildAdjacency();
