@@ -23,6 +23,7 @@
 #include "itkMesh.h"
 #include "itkSheetMesh.h"
 #include "itkSheetMidSurfaceExtractor.h"
+#include "itkSheetRollAxis.h"
 
 #include <string>
 #include <vector>
@@ -273,19 +274,47 @@ private:
     uint16_t                               SplitLabel{ 0 };
   };
   using SheetImageType = Image<uint8_t, 3>;
-  using AxisType = Vector<double, 3>;
-  static AxisType
-  EstimateRollAxis(const SheetImageType * sheetMask, const IntensityImageType * sheetIntensity, bool & fromTensor);
-  static AxisType
-  EstimateRollAxisFromCentroids(const SheetImageType * sheetMask);
-  /** Returns true when the axis came from the structure tensor (so the slices now cut
-   * straight across it). After a resampling, sheetData marks the voxels that lie inside the
-   * original box (1; the others hold no data of the scan); otherwise it is left null. */
-  bool
-  AlignWithRollAxis(typename SheetImageType::Pointer &     sheetMask,
-                    typename IntensityImageType::Pointer & sheetIntensity,
-                    typename SheetImageType::Pointer &     sheetData,
-                    std::vector<std::string> &             warnings) const;
+  using LabelImageType = Image<SizeValueType, 3>;
+  /** The mask's pieces (face-connected components, largest first): their labels, the
+   * intensities (or null), their bounding boxes and sizes (by label), and which are done
+   * (meshed as part of a sheet, dropped or counted as too small). */
+  struct Pieces
+  {
+    const LabelImageType *      Labels{ nullptr };
+    const IntensityImageType *  Intensity{ nullptr };
+    SizeValueType               Objects{ 0 };
+    std::vector<ImageRegion<3>> Boxes;
+    std::vector<SizeValueType>  Sizes;
+    std::vector<uint8_t>        Done;
+  };
+  /** The sheet made of the pieces of `source` (the labels, or a piece split into the sheets
+   * that touch in it) whose labels are kept: their box read, aligned with the roll axis,
+   * denoised and traced. */
+  template <typename TLabelImage>
+  Sheet
+  MeshLabels(const TLabelImage *          source,
+             const IntensityImageType *   intensity,
+             const std::vector<uint8_t> & keep,
+             std::vector<std::string> &   warnings);
+  /** The sheet made from piece `first`: with the smaller pieces in its box that trace with it
+   * as one roll (CutArcFraction of its size at least), or alone. */
+  Sheet
+  MeshSheetFrom(Pieces & pieces, SizeValueType first, std::vector<std::string> & warnings);
+  /** A piece that is not a roll may hold sheets that touch (pages stuck together): split
+   * along the dip of the plate measure between them (SplitTouchingSheets) and mesh each;
+   * otherwise `whole` alone. */
+  std::vector<Sheet>
+  SplitSheet(const Pieces &             pieces,
+             SizeValueType              piece,
+             Sheet &                    whole,
+             double                     minimumCoreVoxels,
+             std::vector<std::string> & warnings);
+  /** What was meshed of how many pieces, when that is not everything; empty otherwise. */
+  std::string
+  PiecesNote(const Pieces & pieces) const;
+  /** m_SheetLabels: every voxel labelled with its sheet's number (from 1). */
+  void
+  LabelSheets(const LabelImageType * labels);
   static void
   ToPhysicalFrame(const typename SheetImageType::PointType &     origin,
                   const typename SheetImageType::DirectionType & direction,
@@ -299,12 +328,6 @@ private:
   PiecesOnMesh(const TLabelImage * labels, const std::vector<uint8_t> & group, const SheetMesh & mesh);
   static constexpr long   PieceOnMeshReach = 2;
   static constexpr double PieceOnMeshFraction = 0.5;
-  /** Smooths the intensities of a noisy scan for tracing (SheetIntensityLevels::DenoisingSigma
-   * across the sheet, twice that along the roll axis); a clean scan is left as it is. */
-  void
-  Denoise(const SheetImageType *                 sheetMask,
-          typename IntensityImageType::Pointer & sheetIntensity,
-          std::vector<std::string> &             warnings) const;
 
   SheetSurfaceMethodEnum                        m_Method{ SheetSurfaceMethodEnum::Auto };
   double                                        m_SpacingAlongSheet{ 0.0 };

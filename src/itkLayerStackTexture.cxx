@@ -48,25 +48,6 @@ NewTexture(const TextureType * like)
   return texture;
 }
 
-TextureType::Pointer
-NewTexture(const LayerStackType * stack)
-{
-  const auto             size = stack->GetBufferedRegion().GetSize();
-  auto                   texture = TextureType::New();
-  TextureType::SizeType  textureSize = { { size[0], size[1] } };
-  TextureType::PointType origin;
-  origin[0] = stack->GetOrigin()[0];
-  origin[1] = stack->GetOrigin()[1];
-  TextureType::SpacingType spacing;
-  spacing[0] = stack->GetSpacing()[0];
-  spacing[1] = stack->GetSpacing()[1];
-  texture->SetRegions(textureSize);
-  texture->SetOrigin(origin);
-  texture->SetSpacing(spacing);
-  texture->Allocate();
-  return texture;
-}
-
 // The ranks of a texture's finite pixels.
 detail::FiniteRanks
 TextureRanks(const TextureType * texture)
@@ -112,17 +93,6 @@ RestoreNaN(TextureType * result, const std::vector<bool> & wasNaN)
   }
 }
 
-// Throws unless `value` is finite and >= 0 (> 0 when not `zeroAllowed`).
-void
-CheckParameter(double value, bool zeroAllowed, const char * function, const char * what)
-{
-  if (!std::isfinite(value) || value < 0.0 || (!zeroAllowed && value == 0.0))
-  {
-    itkGenericExceptionMacro(<< "LayerStackTexture::" << function << ": " << what << " must be "
-                             << (zeroAllowed ? ">= 0" : "> 0") << " and finite, got " << value);
-  }
-}
-
 // Runs `filter`, an ITK filter of textures set up but for its input, on `texture` with
 // its NaN pixels holding `fill`; those pixels are NaN again in the result.
 template <typename TFilter>
@@ -152,6 +122,38 @@ CheckTexture(const TextureType * texture, const char * function)
 }
 } // namespace
 
+namespace detail {
+Image<float, 2>::Pointer
+NewLayerTexture(const Image<float, 3> * stack)
+{
+  const auto                 size = stack->GetBufferedRegion().GetSize();
+  auto                       texture = Image<float, 2>::New();
+  Image<float, 2>::SizeType  textureSize = { { size[0], size[1] } };
+  Image<float, 2>::PointType origin;
+  origin[0] = stack->GetOrigin()[0];
+  origin[1] = stack->GetOrigin()[1];
+  Image<float, 2>::SpacingType spacing;
+  spacing[0] = stack->GetSpacing()[0];
+  spacing[1] = stack->GetSpacing()[1];
+  texture->SetRegions(textureSize);
+  texture->SetOrigin(origin);
+  texture->SetSpacing(spacing);
+  texture->Allocate();
+  return texture;
+}
+
+void
+CheckLayerParameter(double value, bool zeroAllowed, const char * function, const char * what)
+{
+  if (!std::isfinite(value) || value < 0.0 || (!zeroAllowed && value == 0.0))
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::" << function << ": " << what << " must be "
+                             << (zeroAllowed ? ">= 0" : "> 0") << " and finite, got " << value);
+  }
+}
+
+} // namespace detail
+
 LayerStackTexture::TextureType::Pointer
 LayerStackTexture::Combine(const LayerStackType * stack,
                            unsigned int           numberOfLayers,
@@ -166,198 +168,6 @@ LayerStackTexture::Combine(const LayerStackType * stack,
   return detail::CombineLayers(
            stack, numberOfLayers, layerSpacing, focus, stackSide, filter, gaussianSigma, { { side, coreWidth } })
     .front();
-}
-
-std::vector<LayerStackTexture::TextureType::Pointer>
-detail::CombineLayers(const LayerStackType *                stack,
-                      unsigned int                          numberOfLayers,
-                      double                                layerSpacing,
-                      double                                focus,
-                      TextureLayersEnums::Side              stackSide,
-                      TextureLayersEnums::Filter            filter,
-                      double                                gaussianSigma,
-                      const std::vector<LayerCombination> & combinations)
-{
-  if (stack == nullptr)
-  {
-    itkGenericExceptionMacro(<< "LayerStackTexture::Combine: no layer stack");
-  }
-  const auto size = stack->GetBufferedRegion().GetSize();
-  if (stack->GetBufferedRegion() != stack->GetLargestPossibleRegion() || size[2] != numberOfLayers)
-  {
-    itkGenericExceptionMacro(<< "LayerStackTexture::Combine: the stack has " << size[2] << " layers, not "
-                             << numberOfLayers << ", or is not fully buffered");
-  }
-  // Each combination's layers (all of them, or one half of a stack sampled on both sides),
-  // its TextureLayers and its core.
-  struct Plan
-  {
-    std::vector<SizeValueType> Index, Core;
-    TextureLayers              Layers;
-  };
-  std::vector<Plan> plans;
-  for (const detail::LayerCombination & c : combinations)
-  {
-    const auto side = c.Side;
-    CheckParameter(c.CoreWidth, true, "Combine", "the core width");
-    std::vector<SizeValueType> index;
-    unsigned int               count = numberOfLayers;
-    if (side == stackSide)
-    {
-      for (unsigned int k = 0; k < numberOfLayers; ++k)
-      {
-        index.push_back(k);
-      }
-    }
-    else if (stackSide == TextureLayersEnums::Side::Both && numberOfLayers % 2 == 1)
-    {
-      const unsigned int centre = (numberOfLayers - 1) / 2;
-      count = centre + 1;
-      for (unsigned int k = 0; k < count; ++k)
-      {
-        index.push_back(side == TextureLayersEnums::Side::Positive ? centre + k : centre - k);
-      }
-    }
-    else
-    {
-      itkGenericExceptionMacro(<< "LayerStackTexture::Combine: cannot take the " << side << " layers of a stack of "
-                               << numberOfLayers << " layers sampled on side " << stackSide
-                               << " (a stack sampled on both sides with an odd number of layers splits in halves)");
-    }
-    Plan plan{ index, {}, TextureLayers(count, layerSpacing, focus, side, filter, gaussianSigma) };
-    if (c.CoreWidth > 0.0)
-    {
-      for (unsigned int k = 0; k < count; ++k)
-      {
-        if (std::abs(plan.Layers.GetOffsets()[k] - focus) <= c.CoreWidth + 1e-9 * layerSpacing)
-        {
-          plan.Core.push_back(k);
-        }
-      }
-      if (plan.Core.empty())
-      {
-        itkGenericExceptionMacro(<< "LayerStackTexture::Combine: no layer lies within the core width " << c.CoreWidth
-                                 << " of the focus");
-      }
-    }
-    plans.push_back(std::move(plan));
-  }
-
-  std::vector<TextureType::Pointer> textures;
-  std::vector<float *>              out;
-  for (size_t c = 0; c < plans.size(); ++c)
-  {
-    textures.push_back(NewTexture(stack));
-    out.push_back(textures.back()->GetBufferPointer());
-  }
-  const float *       in = stack->GetBufferPointer();
-  const SizeValueType plane = size[0] * size[1];
-  // The largest or smallest sample (the usual filters) whole rows at a time, each layer's row
-  // read in turn, the same values as the pixel-by-pixel combination below.
-  const bool extreme = filter == TextureLayersEnums::Filter::Max || filter == TextureLayersEnums::Filter::Min;
-  const bool largest = filter == TextureLayersEnums::Filter::Max;
-  const auto columns = static_cast<SizeValueType>(size[0]);
-  if (extreme)
-  {
-    MultiThreaderBase::New()->ParallelizeArray(
-      0,
-      size[1],
-      [&](SizeValueType row) {
-        // Any non-finite sample makes a pixel's check NaN (v - v is 0 for finite v only).
-        std::vector<float>  extremumRow(columns), checkRow(columns);
-        std::vector<double> coreRow(columns);
-        float * __restrict extremum = extremumRow.data();
-        float * __restrict check = checkRow.data();
-        double * __restrict core = coreRow.data();
-        for (size_t c = 0; c < plans.size(); ++c)
-        {
-          const Plan &  plan = plans[c];
-          const float * first = in + plan.Index[0] * plane + row * columns;
-          for (SizeValueType x = 0; x < columns; ++x)
-          {
-            extremum[x] = first[x];
-            check[x] = first[x] - first[x];
-          }
-          for (size_t k = 1; k < plan.Index.size(); ++k)
-          {
-            const float * __restrict layer = in + plan.Index[k] * plane + row * columns;
-            if (largest)
-            {
-              for (SizeValueType x = 0; x < columns; ++x)
-              {
-                extremum[x] = extremum[x] < layer[x] ? layer[x] : extremum[x];
-                check[x] += layer[x] - layer[x];
-              }
-            }
-            else
-            {
-              for (SizeValueType x = 0; x < columns; ++x)
-              {
-                extremum[x] = layer[x] < extremum[x] ? layer[x] : extremum[x];
-                check[x] += layer[x] - layer[x];
-              }
-            }
-          }
-          std::fill(core, core + columns, 0.0);
-          for (const SizeValueType k : plan.Core)
-          {
-            const float * __restrict layer = in + plan.Index[k] * plane + row * columns;
-            for (SizeValueType x = 0; x < columns; ++x)
-            {
-              core[x] += layer[x];
-            }
-          }
-          const double coreCount = plan.Core.empty() ? 1.0 : static_cast<double>(plan.Core.size());
-          float * __restrict target = out[c] + row * columns;
-          for (SizeValueType x = 0; x < columns; ++x)
-          {
-            target[x] = check[x] == 0.0f ? static_cast<float>(extremum[x] - core[x] / coreCount) : NaN;
-          }
-        }
-      },
-      nullptr);
-    return textures;
-  }
-  // Row by row in parallel, each pixel's samples read once for every combination.
-  MultiThreaderBase::New()->ParallelizeArray(
-    0,
-    size[1],
-    [&](SizeValueType row) {
-      std::vector<float> all(numberOfLayers), samples(numberOfLayers);
-      std::vector<char>  finite(numberOfLayers);
-      for (SizeValueType p = row * size[0]; p < (row + 1) * size[0]; ++p)
-      {
-        for (unsigned int k = 0; k < numberOfLayers; ++k)
-        {
-          all[k] = in[k * plane + p];
-          finite[k] = std::isfinite(all[k]);
-        }
-        for (size_t c = 0; c < plans.size(); ++c)
-        {
-          const Plan & plan = plans[c];
-          bool         whole = true;
-          for (size_t k = 0; k < plan.Index.size(); ++k)
-          {
-            samples[k] = all[plan.Index[k]];
-            whole = whole && finite[plan.Index[k]];
-          }
-          if (!whole)
-          {
-            out[c][p] = NaN;
-            continue;
-          }
-          double coreMean = 0.0;
-          for (SizeValueType k : plan.Core)
-          {
-            coreMean += samples[k];
-          }
-          coreMean = plan.Core.empty() ? 0.0 : coreMean / plan.Core.size();
-          out[c][p] = static_cast<float>(plan.Layers.Combine(samples.data()) - coreMean);
-        }
-      }
-    },
-    nullptr);
-  return textures;
 }
 
 double
@@ -390,7 +200,7 @@ LayerStackTexture::LayerWindow(const LayerStackType * stack, unsigned int first,
                              << static_cast<SizeValueType>(first) + count - 1 << " are not in a stack of " << size[2]
                              << " layers, or the stack is not fully buffered");
   }
-  auto                texture = NewTexture(stack);
+  auto                texture = detail::NewLayerTexture(stack);
   const float *       in = stack->GetBufferPointer();
   float *             out = texture->GetBufferPointer();
   const SizeValueType plane = size[0] * size[1];
@@ -422,7 +232,7 @@ double
 LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigma)
 {
   CheckTexture(texture, "StrokeContrast");
-  CheckParameter(strokeSigma, false, "StrokeContrast", "the stroke sigma");
+  detail::CheckLayerParameter(strokeSigma, false, "StrokeContrast", "the stroke sigma");
   const auto    fine = Smooth(texture, strokeSigma);
   const auto    coarse = Smooth(texture, 6.0 * strokeSigma);
   auto          band = NewTexture(texture);
@@ -473,7 +283,7 @@ LayerStackTexture::TextureType::Pointer
 LayerStackTexture::Smooth(const TextureType * texture, double sigma)
 {
   CheckTexture(texture, "Smooth");
-  CheckParameter(sigma, true, "Smooth", "sigma");
+  detail::CheckLayerParameter(sigma, true, "Smooth", "sigma");
   auto          result = NewTexture(texture);
   const auto    size = texture->GetBufferedRegion().GetSize();
   const size_t  n = texture->GetBufferedRegion().GetNumberOfPixels();
@@ -565,7 +375,7 @@ LayerStackTexture::TextureType::Pointer
 LayerStackTexture::Median(const TextureType * texture, double radius)
 {
   CheckTexture(texture, "Median");
-  CheckParameter(radius, true, "Median", "the radius");
+  detail::CheckLayerParameter(radius, true, "Median", "the radius");
   auto          result = NewTexture(texture);
   const auto    size = texture->GetBufferedRegion().GetSize();
   const float * in = texture->GetBufferPointer();
@@ -688,8 +498,8 @@ LayerStackTexture::TextureType::Pointer
 LayerStackTexture::EdgePreservingSmooth(const TextureType * texture, double domainSigma, double rangeSigma)
 {
   CheckTexture(texture, "EdgePreservingSmooth");
-  CheckParameter(domainSigma, true, "EdgePreservingSmooth", "the domain sigma");
-  CheckParameter(rangeSigma, false, "EdgePreservingSmooth", "the range sigma");
+  detail::CheckLayerParameter(domainSigma, true, "EdgePreservingSmooth", "the domain sigma");
+  detail::CheckLayerParameter(rangeSigma, false, "EdgePreservingSmooth", "the range sigma");
   const float * begin = texture->GetBufferPointer();
   const float * end = begin + texture->GetBufferedRegion().GetNumberOfPixels();
   float         top = -std::numeric_limits<float>::infinity();
@@ -714,8 +524,8 @@ LayerStackTexture::TextureType::Pointer
 LayerStackTexture::Deconvolve(const TextureType * texture, double psfSigma, double regularization)
 {
   CheckTexture(texture, "Deconvolve");
-  CheckParameter(psfSigma, true, "Deconvolve", "the PSF sigma");
-  CheckParameter(regularization, false, "Deconvolve", "the regularization");
+  detail::CheckLayerParameter(psfSigma, true, "Deconvolve", "the PSF sigma");
+  detail::CheckLayerParameter(regularization, false, "Deconvolve", "the regularization");
   const detail::FiniteRanks ranks = TextureRanks(texture);
   if (psfSigma == 0.0 || ranks.GetCount() == 0)
   {
@@ -758,8 +568,8 @@ LayerStackTexture::Deconvolve(const TextureType * texture, double psfSigma, doub
 double
 LayerStackTexture::ScanBlurSigma(double psfFWHM, double voxelSize)
 {
-  CheckParameter(psfFWHM, true, "ScanBlurSigma", "the PSF FWHM");
-  CheckParameter(voxelSize, true, "ScanBlurSigma", "the voxel size");
+  detail::CheckLayerParameter(psfFWHM, true, "ScanBlurSigma", "the PSF FWHM");
+  detail::CheckLayerParameter(voxelSize, true, "ScanBlurSigma", "the voxel size");
   const double psfSigma = psfFWHM / (2.0 * std::sqrt(2.0 * std::log(2.0)));
   return std::sqrt(psfSigma * psfSigma + voxelSize * voxelSize / 12.0);
 }
@@ -768,7 +578,7 @@ LayerStackTexture::TextureType::Pointer
 LayerStackTexture::TrimBorder(const TextureType * texture, double width)
 {
   CheckTexture(texture, "TrimBorder");
-  CheckParameter(width, true, "TrimBorder", "the width");
+  detail::CheckLayerParameter(width, true, "TrimBorder", "the width");
   auto          result = NewTexture(texture);
   const float * in = texture->GetBufferPointer();
   float *       out = result->GetBufferPointer();

@@ -17,8 +17,8 @@
  *=========================================================================*/
 // MassSpringSystem's implicit (backward Euler) step and quasi-static relaxation.
 #include "itkMassSpringSystem.h"
-#include "vuSolverThreads.h"
 #include "vuImplicitSolver.h"
+#include "vuSolverThreads.h"
 
 #include "itkMacro.h"
 
@@ -28,74 +28,81 @@
 #include <numeric>
 
 namespace itk {
+// The implicit system's matrix (M / h^2 plus the springs' Laplacian over the free
+// particles) assembled and factorised; its symbolic analysis kept while the free set holds.
+void
+MassSpringSystem::ImplicitSolver::Factorise(const MassSpringSystem & system, double invH2)
+{
+  const size_t n = system.m_Masses.size();
+  freeIndex.assign(n, -1);
+  freeParticles.clear();
+  for (size_t i = 0; i < n; ++i)
+  {
+    if (!system.m_Locked[i])
+    {
+      freeIndex[i] = static_cast<int32_t>(freeParticles.size());
+      freeParticles.push_back(static_cast<uint32_t>(i));
+    }
+  }
+  const auto                          nf = static_cast<Eigen::Index>(freeParticles.size());
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(nf + 4 * system.m_SpringI.size());
+  for (Eigen::Index r = 0; r < nf; ++r)
+  {
+    triplets.emplace_back(r, r, system.m_Masses[freeParticles[r]] * invH2);
+  }
+  for (size_t s = 0; s < system.m_SpringI.size(); ++s)
+  {
+    const int32_t a = freeIndex[system.m_SpringI[s]];
+    const int32_t b = freeIndex[system.m_SpringJ[s]];
+    const double  k = system.m_Stiffness[s];
+    if (a >= 0)
+    {
+      triplets.emplace_back(a, a, k);
+    }
+    if (b >= 0)
+    {
+      triplets.emplace_back(b, b, k);
+    }
+    if (a >= 0 && b >= 0)
+    {
+      triplets.emplace_back(a, b, -k);
+      triplets.emplace_back(b, a, -k);
+    }
+  }
+  SparseMatrix A(nf, nf);
+  A.setFromTriplets(triplets.begin(), triplets.end());
+  if (!analysed)
+  {
+    factorisation.analyzePattern(A);
+    analysed = factorisation.info() == Eigen::Success;
+  }
+  if (analysed)
+  {
+    factorisation.factorize(A);
+  }
+  if (!analysed || factorisation.info() != Eigen::Success)
+  {
+    analysed = false;
+    itkGenericExceptionMacro(<< "MassSpringSystem: factorisation of the implicit system failed");
+  }
+  valid = true;
+}
+
 void
 MassSpringSystem::StepImplicit(bool quasiStatic)
 {
-  using SparseMatrix = ImplicitSolver::SparseMatrix;
   const vu::SolverThreads solverThreads;
   if (!m_AdjacencyValid)
   {
     BuildAdjacency();
   }
-  const size_t     n = m_Masses.size();
   const double     h = m_TimeStep;
   const double     invH2 = 1.0 / (h * h);
   ImplicitSolver & solver = *m_Solver;
   if (!solver.valid)
   {
-    solver.freeIndex.assign(n, -1);
-    solver.freeParticles.clear();
-    for (size_t i = 0; i < n; ++i)
-    {
-      if (!m_Locked[i])
-      {
-        solver.freeIndex[i] = static_cast<int32_t>(solver.freeParticles.size());
-        solver.freeParticles.push_back(static_cast<uint32_t>(i));
-      }
-    }
-    const auto                          nf = static_cast<Eigen::Index>(solver.freeParticles.size());
-    std::vector<Eigen::Triplet<double>> triplets;
-    triplets.reserve(nf + 4 * m_SpringI.size());
-    for (Eigen::Index r = 0; r < nf; ++r)
-    {
-      triplets.emplace_back(r, r, m_Masses[solver.freeParticles[r]] * invH2);
-    }
-    for (size_t s = 0; s < m_SpringI.size(); ++s)
-    {
-      const int32_t a = solver.freeIndex[m_SpringI[s]];
-      const int32_t b = solver.freeIndex[m_SpringJ[s]];
-      const double  k = m_Stiffness[s];
-      if (a >= 0)
-      {
-        triplets.emplace_back(a, a, k);
-      }
-      if (b >= 0)
-      {
-        triplets.emplace_back(b, b, k);
-      }
-      if (a >= 0 && b >= 0)
-      {
-        triplets.emplace_back(a, b, -k);
-        triplets.emplace_back(b, a, -k);
-      }
-    }
-    SparseMatrix A(nf, nf);
-    A.setFromTriplets(triplets.begin(), triplets.end());
-    if (!solver.analysed)
-    {
-      solver.factorisation.analyzePattern(A);
-      solver.analysed = solver.factorisation.info() == Eigen::Success;
-    }
-    if (solver.analysed)
-    {
-      solver.factorisation.factorize(A);
-    }
-    if (!solver.analysed || solver.factorisation.info() != Eigen::Success)
-    {
-      solver.analysed = false;
-      itkGenericExceptionMacro(<< "MassSpringSystem: factorisation of the implicit system failed");
-    }
-    solver.valid = true;
+    solver.Factorise(*this, invH2);
   }
 
   const auto          nf = static_cast<Eigen::Index>(solver.freeParticles.size());

@@ -67,64 +67,60 @@ Components(const PieceImage * like, TInside inside, std::vector<SizeValueType> &
   labels->DisconnectPipeline();
   return labels;
 }
-} // namespace
 
-TouchingSheetSplit
-SplitTouchingSheets(const Image<float, 3> * values,
-                    const PieceImage *      piece,
-                    double                  sigma,
-                    SizeValueType           minimumCoreVoxels)
+// The scale of the plate measure for a piece's sheets: at least `sigma`, and at least
+// ScalePerThickness times their thickness, twice the piece's volume over its surface (faces
+// between its voxels and the others; a staircase overstates an oblique sheet's surface, so
+// this errs thin). At a scale well below a thick sheet's half thickness, each face would
+// make a ridge of its own.
+double
+MeasureScale(const PieceImage * piece, double sigma)
 {
-  if (values == nullptr || piece == nullptr || values->GetBufferedRegion() != piece->GetBufferedRegion())
+  const uint8_t * in = piece->GetBufferPointer();
+  const auto      size = piece->GetBufferedRegion().GetSize();
+  const auto &    spacing = piece->GetSpacing();
+  SizeValueType   voxels = 0, faces = 0;
+  for (SizeValueType z = 0; z < size[2]; ++z)
   {
-    itkGenericExceptionMacro(<< "SplitTouchingSheets: the values and the piece must cover the same region");
-  }
-  const SizeValueType n = piece->GetBufferedRegion().GetNumberOfPixels();
-  const uint8_t *     in = piece->GetBufferPointer();
-
-  // The sheets' thickness: twice the piece's volume over its surface (faces between its
-  // voxels and the others; a staircase overstates an oblique sheet's surface, so this
-  // errs thin), so that the measure's scale follows it: at a scale well below a thick
-  // sheet's half thickness, each face would make a ridge of its own.
-  {
-    const auto    size = piece->GetBufferedRegion().GetSize();
-    const auto &  spacing = piece->GetSpacing();
-    SizeValueType voxels = 0, faces = 0;
-    for (SizeValueType z = 0; z < size[2]; ++z)
+    for (SizeValueType y = 0; y < size[1]; ++y)
     {
-      for (SizeValueType y = 0; y < size[1]; ++y)
+      for (SizeValueType x = 0; x < size[0]; ++x)
       {
-        for (SizeValueType x = 0; x < size[0]; ++x)
+        const SizeValueType v = (z * size[1] + y) * size[0] + x;
+        if (in[v] == 0)
         {
-          const SizeValueType v = (z * size[1] + y) * size[0] + x;
-          if (in[v] == 0)
-          {
-            continue;
-          }
-          ++voxels;
-          faces += (x == 0 || in[v - 1] == 0) + (x + 1 == size[0] || in[v + 1] == 0);
-          faces += (y == 0 || in[v - size[0]] == 0) + (y + 1 == size[1] || in[v + size[0]] == 0);
-          faces += (z == 0 || in[v - size[0] * size[1]] == 0) + (z + 1 == size[2] || in[v + size[0] * size[1]] == 0);
+          continue;
         }
+        ++voxels;
+        faces += (x == 0 || in[v - 1] == 0) + (x + 1 == size[0] || in[v + 1] == 0);
+        faces += (y == 0 || in[v - size[0]] == 0) + (y + 1 == size[1] || in[v + size[0]] == 0);
+        faces += (z == 0 || in[v - size[0] * size[1]] == 0) + (z + 1 == size[2] || in[v + size[0] * size[1]] == 0);
       }
     }
-    const double voxelSize = std::cbrt(spacing[0] * spacing[1] * spacing[2]);
-    if (faces > 0)
-    {
-      sigma = std::max(sigma, ScalePerThickness * 2.0 * voxelSize * static_cast<double>(voxels) / faces);
-    }
   }
+  const double voxelSize = std::cbrt(spacing[0] * spacing[1] * spacing[2]);
+  if (faces > 0)
+  {
+    sigma = std::max(sigma, ScalePerThickness * 2.0 * voxelSize * static_cast<double>(voxels) / faces);
+  }
+  return sigma;
+}
 
-  // The plate measure on the piece's voxels.
+// The plate measure (minus the across-sheet eigenvalue of the Hessian where it dominates)
+// on the piece's voxels, 0 elsewhere; `measured` receives its non-zero values.
+std::vector<float>
+PlateMeasure(const Image<float, 3> * values, const PieceImage * piece, double sigma, std::vector<double> & measured)
+{
+  const SizeValueType n = piece->GetBufferedRegion().GetNumberOfPixels();
+  const uint8_t *     in = piece->GetBufferPointer();
   using HessianFilter = HessianRecursiveGaussianImageFilter<Image<float, 3>>;
   auto hessian = HessianFilter::New();
   hessian->SetInput(values);
   hessian->SetSigma(sigma);
   hessian->SetNormalizeAcrossScale(false);
   hessian->Update();
-  const auto *        tensors = hessian->GetOutput()->GetBufferPointer();
-  std::vector<float>  plate(n, 0.0f);
-  std::vector<double> measured;
+  const auto *       tensors = hessian->GetOutput()->GetBufferPointer();
+  std::vector<float> plate(n, 0.0f);
   for (SizeValueType v = 0; v < n; ++v)
   {
     if (in[v] == 0)
@@ -142,34 +138,20 @@ SplitTouchingSheets(const Image<float, 3> * values,
       measured.push_back(-across);
     }
   }
-  TouchingSheetSplit result;
-  result.Labels = Image<uint16_t, 3>::New();
-  result.Labels->CopyInformation(piece);
-  result.Labels->SetRegions(piece->GetBufferedRegion());
-  result.Labels->Allocate();
-  result.Labels->FillBuffer(0);
-  uint16_t * out = result.Labels->GetBufferPointer();
-  auto       whole = [&]() {
-    for (SizeValueType v = 0; v < n; ++v)
-    {
-      out[v] = in[v] != 0 ? 1 : 0;
-    }
-    result.Sheets = 1;
-    return result;
-  };
-  if (measured.size() < 2 * minimumCoreVoxels)
-  {
-    return whole();
-  }
-  std::nth_element(measured.begin(), measured.begin() + measured.size() / 2, measured.end());
-  const double median = measured[measured.size() / 2];
+  return plate;
+}
 
-  // Cores: each kept whole unless it falls apart into two or more large cores at the next
-  // fraction. `owner` holds the core (an index into `cores`) of every core voxel.
-  struct Core
-  {
-    std::vector<SizeValueType> Voxels;
-  };
+struct Core
+{
+  std::vector<SizeValueType> Voxels;
+};
+
+// Cores: the components of the plate measure above the first fraction of its median, each
+// kept whole unless it falls apart into two or more large cores at the next fraction.
+std::vector<Core>
+FindCores(const PieceImage * piece, const std::vector<float> & plate, double median, SizeValueType minimumCoreVoxels)
+{
+  const SizeValueType        n = piece->GetBufferedRegion().GetNumberOfPixels();
   std::vector<Core>          cores;
   std::vector<SizeValueType> sizes;
   auto                       first = Components(
@@ -231,15 +213,16 @@ SplitTouchingSheets(const Image<float, 3> * values,
     }
     cores = std::move(next);
   }
-  if (cores.size() < 2)
-  {
-    return whole();
-  }
-  std::sort(
-    cores.begin(), cores.end(), [](const Core & a, const Core & b) { return a.Voxels.size() > b.Voxels.size(); });
+  return cores;
+}
 
-  // Every voxel of the piece to its nearest core.
-  auto seeds = LabelImage::New();
+// Every voxel of the piece labelled with its nearest core (1-based, in the order of `cores`).
+void
+LabelByNearestCore(const PieceImage * piece, const std::vector<Core> & cores, uint16_t * out)
+{
+  const SizeValueType n = piece->GetBufferedRegion().GetNumberOfPixels();
+  const uint8_t *     in = piece->GetBufferPointer();
+  auto                seeds = LabelImage::New();
   seeds->CopyInformation(piece);
   seeds->SetRegions(piece->GetBufferedRegion());
   seeds->Allocate();
@@ -261,9 +244,57 @@ SplitTouchingSheets(const Image<float, 3> * values,
   {
     out[v] = in[v] != 0 ? static_cast<uint16_t>(voronoi[v]) : 0;
   }
+}
+} // namespace
+
+TouchingSheetSplit
+SplitTouchingSheets(const Image<float, 3> * values,
+                    const PieceImage *      piece,
+                    double                  sigma,
+                    SizeValueType           minimumCoreVoxels)
+{
+  if (values == nullptr || piece == nullptr || values->GetBufferedRegion() != piece->GetBufferedRegion())
+  {
+    itkGenericExceptionMacro(<< "SplitTouchingSheets: the values and the piece must cover the same region");
+  }
+  const SizeValueType      n = piece->GetBufferedRegion().GetNumberOfPixels();
+  const uint8_t *          in = piece->GetBufferPointer();
+  std::vector<double>      measured;
+  const std::vector<float> plate = PlateMeasure(values, piece, MeasureScale(piece, sigma), measured);
+  TouchingSheetSplit       result;
+  result.Labels = Image<uint16_t, 3>::New();
+  result.Labels->CopyInformation(piece);
+  result.Labels->SetRegions(piece->GetBufferedRegion());
+  result.Labels->Allocate();
+  result.Labels->FillBuffer(0);
+  uint16_t * out = result.Labels->GetBufferPointer();
+  auto       whole = [&]() {
+    for (SizeValueType v = 0; v < n; ++v)
+    {
+      out[v] = in[v] != 0 ? 1 : 0;
+    }
+    result.Sheets = 1;
+    return result;
+  };
+  if (measured.size() < 2 * minimumCoreVoxels)
+  {
+    return whole();
+  }
+  std::nth_element(measured.begin(), measured.begin() + measured.size() / 2, measured.end());
+  const double median = measured[measured.size() / 2];
+
+  std::vector<Core> cores = FindCores(piece, plate, median, minimumCoreVoxels);
+  if (cores.size() < 2)
+  {
+    return whole();
+  }
+  std::sort(
+    cores.begin(), cores.end(), [](const Core & a, const Core & b) { return a.Voxels.size() > b.Voxels.size(); });
+  LabelByNearestCore(piece, cores, out);
   result.Sheets = static_cast<unsigned int>(cores.size());
   return result;
 }
+
 Image<float, 3>::Pointer
 BlankOtherSheets(const Image<float, 3> * volume, const Image<uint16_t, 3> * sheets, uint16_t sheet)
 {

@@ -44,6 +44,15 @@ CombineLayers(const Image<float, 3> *               stack,
               TextureLayersEnums::Filter            filter,
               double                                gaussianSigma,
               const std::vector<LayerCombination> & combinations);
+
+/** An empty texture with the geometry of the stack's first two axes. */
+Image<float, 2>::Pointer
+NewLayerTexture(const Image<float, 3> * stack);
+
+/** Throws unless `value` is finite and >= 0 (> 0 when not `zeroAllowed`), naming
+ * LayerStackTexture::`function` and `what`. */
+void
+CheckLayerParameter(double value, bool zeroAllowed, const char * function, const char * what);
 } // namespace detail
 } // end namespace itk
 

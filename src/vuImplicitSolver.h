@@ -50,6 +50,11 @@ struct MassSpringSystem::ImplicitSolver
   std::vector<uint32_t> freeParticles;
   bool                  valid{ false };    // the numeric factorisation matches the system
   bool                  analysed{ false }; // the symbolic analysis matches the free set
+
+  // Assembles M / h^2 plus the springs' Laplacian over the free particles and factorises
+  // it (the symbolic analysis only when the free set changed); throws when it fails.
+  void
+  Factorise(const MassSpringSystem & system, double invH2);
   // Kept for the engine's lifetime: creating a threader per force loop costs more than a
   // small system's whole step.
   MultiThreaderBase::Pointer threader;

@@ -106,19 +106,27 @@ SheetMeasure(const PolarSlice & slice, long half, long flankOffset, long flankHa
   return measure;
 }
 
-// One turn: steps i = 0, 1, ... at m = m0 + dir * i; `bound` holds the neighbouring turn's
-// radius at each step, on the side -side of the path (side +1: the path lies outside it).
-TurnPath
-TraceTurn(const PolarSlice &          slice,
-          const PolarSlice &          measure,
-          long                        m0,
-          int                         dir,
-          const std::vector<double> & bound,
-          const std::vector<double> & beyond,
-          int                         side,
-          double                      startRho,
-          double                      ridgeLevel,
-          const SpiralPathSettings &  settings)
+// The minimal-path table of one turn: per step i, the admissible samples lo[i]..hi[i], the
+// least total cost of reaching each, and the sample of step i - 1 it came from. `bound`
+// holds the neighbouring turn's radius at each step, on the side -side of the path (side
+// +1: the path lies outside it), `beyond` the turn past it.
+struct PathTable
+{
+  std::vector<long>                lo, hi;
+  std::vector<std::vector<double>> total;
+  std::vector<std::vector<long>>   from;
+};
+
+PathTable
+FillPathTable(const PolarSlice &          slice,
+              const PolarSlice &          measure,
+              long                        m0,
+              int                         dir,
+              const std::vector<double> & bound,
+              const std::vector<double> & beyond,
+              int                         side,
+              double                      startRho,
+              const SpiralPathSettings &  settings)
 {
   const double dr = slice.Dr;
   const double least = LeastApart * std::max(settings.Width, settings.Voxel);
@@ -127,7 +135,6 @@ TraceTurn(const PolarSlice &          slice,
   const double window = std::max(Window * settings.Pitch, settings.Voxel);
   const long   centre = static_cast<long>(std::ceil(settings.Voxel / dr));
   const auto   n = static_cast<long>(bound.size());
-  const double step = 2.0 * Pi / static_cast<double>(slice.Rays);
   const auto   shape = RunningMedian(bound, std::max(8L, slice.Rays / 32));
   // `beyond`: the turn on the far side of `bound`, and the spacing between the two.
   std::vector<double> localSpacing;
@@ -141,11 +148,13 @@ TraceTurn(const PolarSlice &          slice,
     return std::isnan(v) ? NoDataCost : 1.0 - std::clamp(v, 0.0, 1.0);
   };
 
-  std::vector<long>                lo, hi;
-  std::vector<std::vector<double>> total;
-  std::vector<std::vector<long>>   from;
-  const double                     infinite = std::numeric_limits<double>::infinity();
-  long                             previousShapeSample = n > 0 ? std::lround(shape[0] / dr) : 0;
+  PathTable                          table;
+  std::vector<long> &                lo = table.lo;
+  std::vector<long> &                hi = table.hi;
+  std::vector<std::vector<double>> & total = table.total;
+  std::vector<std::vector<long>> &   from = table.from;
+  const double                       infinite = std::numeric_limits<double>::infinity();
+  long                               previousShapeSample = n > 0 ? std::lround(shape[0] / dr) : 0;
   for (long i = 0; i < n; ++i)
   {
     const double b = bound[static_cast<size_t>(i)];
@@ -214,16 +223,31 @@ TraceTurn(const PolarSlice &          slice,
     total.push_back(std::move(row));
     from.push_back(std::move(back));
   }
+  return table;
+}
 
-  TurnPath   path;
-  const auto steps = static_cast<long>(total.size());
-  if (steps == 0)
-  {
-    path.Ended = true;
-    return path;
-  }
-  std::vector<long> j(static_cast<size_t>(steps));
-  const auto &      lastRow = total.back();
+// The path through a filled table, moved up the measure to the sheet's peak and centred to
+// a sub-sample radius, each step marked on the sheet (1), in air (0) or without data (2).
+TurnPath
+CentrePath(const PolarSlice &         slice,
+           const PolarSlice &         measure,
+           const PathTable &          table,
+           long                       m0,
+           int                        dir,
+           int                        side,
+           double                     ridgeLevel,
+           const SpiralPathSettings & settings)
+{
+  const double              dr = slice.Dr;
+  const double              infinite = std::numeric_limits<double>::infinity();
+  const std::vector<long> & lo = table.lo;
+  const std::vector<long> & hi = table.hi;
+  const auto &              total = table.total;
+  const auto &              from = table.from;
+  const auto                steps = static_cast<long>(total.size());
+  TurnPath                  path;
+  std::vector<long>         j(static_cast<size_t>(steps));
+  const auto &              lastRow = total.back();
   j.back() = lo.back() + static_cast<long>(std::min_element(lastRow.begin(), lastRow.end()) - lastRow.begin());
   for (long i = steps - 1; i > 0; --i)
   {
@@ -270,10 +294,17 @@ TraceTurn(const PolarSlice &          slice,
     // No data: neither sheet nor air (2).
     path.Confirmed.push_back(onSheet ? 1 : std::isnan(v) ? 2 : 0);
   }
+  return path;
+}
 
-  // The sheet ends where EndArc of air begins after which the path finds the sheet on less
-  // than TailOnSheet of its steps (a faint stretch or a touch is followed by sheet again;
-  // the end of the sheet by air). The reference turn (side 0) is followed whole.
+// Cuts the path where the sheet ends: EndArc of air after which the path finds the sheet
+// on less than TailOnSheet of its steps (a faint stretch or a touch is followed by sheet
+// again; the end of the sheet by air), or where the table stopped short of all `n` steps.
+// The reference turn (side 0) is followed whole.
+void
+CutAtSheetEnd(TurnPath & path, long n, int side, double step, const SpiralPathSettings & settings)
+{
+  const auto          steps = static_cast<long>(path.Rho.size());
   std::vector<double> onSheetAfter(static_cast<size_t>(steps + 1), 0.0), countedAfter(onSheetAfter.size(), 0.0);
   for (long i = steps - 1; i >= 0; --i)
   {
@@ -309,6 +340,31 @@ TraceTurn(const PolarSlice &          slice,
     path.Confirmed.resize(path.Rho.size());
     path.Measure.resize(path.Rho.size());
   }
+}
+
+// One turn: steps i = 0, 1, ... at m = m0 + dir * i; `bound` holds the neighbouring turn's
+// radius at each step, on the side -side of the path (side +1: the path lies outside it).
+TurnPath
+TraceTurn(const PolarSlice &          slice,
+          const PolarSlice &          measure,
+          long                        m0,
+          int                         dir,
+          const std::vector<double> & bound,
+          const std::vector<double> & beyond,
+          int                         side,
+          double                      startRho,
+          double                      ridgeLevel,
+          const SpiralPathSettings &  settings)
+{
+  const PathTable table = FillPathTable(slice, measure, m0, dir, bound, beyond, side, startRho, settings);
+  if (table.total.empty())
+  {
+    TurnPath path;
+    path.Ended = true;
+    return path;
+  }
+  TurnPath path = CentrePath(slice, measure, table, m0, dir, side, ridgeLevel, settings);
+  CutAtSheetEnd(path, static_cast<long>(bound.size()), side, 2.0 * Pi / static_cast<double>(slice.Rays), settings);
   for (char & c : path.Confirmed)
   {
     c = c == 1 ? 1 : 0;

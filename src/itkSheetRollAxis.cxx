@@ -1,0 +1,383 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "itkSheetRollAxis.h"
+#include "itkGradientRecursiveGaussianImageFilter.h"
+#include "itkNearestNeighborInterpolateImageFunction.h"
+#include "itkParallelImageRows.h"
+#include "itkResampleImageFilter.h"
+#include "itkSheetMidSurfaceExtractor.h"
+#include "itkSmoothingRecursiveGaussianImageFilter.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+
+#include "vnl/algo/vnl_determinant.h"
+#include "vnl/algo/vnl_symmetric_eigensystem.h"
+
+namespace itk {
+SheetRollAxis::AxisType
+SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageType * sheetIntensity, bool & fromTensor)
+{
+  // The sheet does not change along the roll axis: its normals all lie across it, so the
+  // axis is the direction of least gradient energy over the sheet (the structure tensor's
+  // smallest eigenvector), taken from the lightly smoothed intensities (the mask where
+  // there are none). Isotropic noise adds to every eigenvalue alike and moves no
+  // eigenvector; the roll's edges add energy along the axis only. A flat or gently curved
+  // sheet has two small eigenvalues and no such axis: then the centroids' line decides.
+  // The gradient is the Gaussian derivative, not a central difference of the smoothed
+  // image: a central difference damps a thin sheet's high in-plane frequencies more than
+  // its low ones along the slices, which tips every normal towards the slice normal and
+  // overstates a tilt by about a tenth (2 degrees at 17).
+  using GradientImageType = Image<CovariantVector<float, 3>, 3>;
+  using GradientType = GradientRecursiveGaussianImageFilter<IntensityImageType, GradientImageType>;
+  auto gradientFilter = GradientType::New();
+  if (sheetIntensity != nullptr)
+  {
+    gradientFilter->SetInput(sheetIntensity);
+  }
+  else
+  {
+    // The mask as 0 / 1 intensities on its own buffered box.
+    auto source = IntensityImageType::New();
+    source->CopyInformation(sheetMask);
+    source->SetRegions(sheetMask->GetBufferedRegion());
+    source->Allocate();
+    const size_t count = sheetMask->GetBufferedRegion().GetNumberOfPixels();
+    for (size_t i = 0; i < count; ++i)
+    {
+      source->GetBufferPointer()[i] = sheetMask->GetBufferPointer()[i] != 0 ? 1.0f : 0.0f;
+    }
+    gradientFilter->SetInput(source);
+  }
+  GradientType::SigmaArrayType sigmas;
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    sigmas[d] = sheetMask->GetSpacing()[d];
+  }
+  gradientFilter->SetSigmaArray(sigmas);
+  gradientFilter->SetUseImageDirection(true);
+  gradientFilter->Update();
+  const auto *    gradients = gradientFilter->GetOutput()->GetBufferPointer();
+  const uint8_t * mask = sheetMask->GetBufferPointer();
+  const auto      size = sheetMask->GetBufferedRegion().GetSize();
+  const auto &    direction = sheetMask->GetDirection();
+  // Slice by slice in parallel, then summed in slice order (the same sum on any number of
+  // threads).
+  std::vector<std::array<double, 9>> sliceTensors(size[2], std::array<double, 9>{});
+  ForEachImageRow(sheetMask, sheetMask->GetBufferedRegion(), [&](SizeValueType k, SizeValueType, const uint8_t * row) {
+    std::array<double, 9> & sum = sliceTensors[k];
+    const auto *            gradientRow = gradients + (row - mask);
+    for (size_t i = 0; i < size[0]; ++i)
+    {
+      if (row[i] == 0)
+      {
+        continue;
+      }
+      const auto & physical = gradientRow[i];
+      for (unsigned r = 0; r < 3; ++r)
+      {
+        for (unsigned c = 0; c < 3; ++c)
+        {
+          sum[3 * r + c] += static_cast<double>(physical[r]) * static_cast<double>(physical[c]);
+        }
+      }
+    }
+  });
+  vnl_matrix<double> tensor(3, 3, 0.0);
+  for (const auto & sum : sliceTensors)
+  {
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      for (unsigned c = 0; c < 3; ++c)
+      {
+        tensor(r, c) += sum[3 * r + c];
+      }
+    }
+  }
+  const vnl_symmetric_eigensystem<double> eigen(tensor);
+  // Eigenvalues ascending. A roll spreads its normals evenly across the axis: the two
+  // large eigenvalues are comparable and far above the axis's.
+  constexpr double rolledEigenvalueRatio = 2.5;
+  constexpr double largestTilt = 45.0;
+  if (eigen.get_eigenvalue(1) > rolledEigenvalueRatio * std::max(eigen.get_eigenvalue(0), 0.0) &&
+      eigen.get_eigenvalue(1) > 0.0)
+  {
+    AxisType axis;
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      axis[r] = eigen.get_eigenvector(0)[r];
+    }
+    const double cosine = axis[0] * direction[0][2] + axis[1] * direction[1][2] + axis[2] * direction[2][2];
+    if (std::abs(cosine) >= std::cos(largestTilt * Math::pi / 180.0))
+    {
+      fromTensor = true;
+      return cosine < 0.0 ? AxisType(-axis) : axis;
+    }
+  }
+  fromTensor = false;
+  return EstimateFromCentroids(sheetMask);
+}
+
+SheetRollAxis::AxisType
+SheetRollAxis::EstimateFromCentroids(const SheetImageType * sheetMask)
+{
+  // Least-squares line i(k), j(k) through the centroids of the middle 60 % of the slices
+  // with material: slices near the ends of a tilted roll cut it partly, which biases them.
+  const auto          size = sheetMask->GetBufferedRegion().GetSize();
+  std::vector<double> count(size[2], 0.0), sumI(size[2], 0.0), sumJ(size[2], 0.0);
+  ForEachImageRow(
+    sheetMask, sheetMask->GetBufferedRegion(), [&](SizeValueType k, SizeValueType j, const uint8_t * row) {
+      for (size_t i = 0; i < size[0]; ++i)
+      {
+        if (row[i] != 0)
+        {
+          count[k] += 1.0;
+          sumI[k] += static_cast<double>(i);
+          sumJ[k] += static_cast<double>(j);
+        }
+      }
+    });
+  long first = -1, last = -1;
+  for (size_t k = 0; k < size[2]; ++k)
+  {
+    if (count[k] > 0.0)
+    {
+      first = first < 0 ? static_cast<long>(k) : first;
+      last = static_cast<long>(k);
+    }
+  }
+  const long margin = (last - first) / 5;
+  double     sw = 0, sk = 0, skk = 0, si = 0, sj = 0, ski = 0, skj = 0;
+  for (long k = first + margin; k <= last - margin && k >= 0; ++k)
+  {
+    const auto kk = static_cast<double>(k);
+    sw += count[k];
+    sk += count[k] * kk;
+    skk += count[k] * kk * kk;
+    si += sumI[k];
+    sj += sumJ[k];
+    ski += kk * sumI[k];
+    skj += kk * sumJ[k];
+  }
+  const double denominator = sw * skk - sk * sk;
+  double       slope[2] = { 0.0, 0.0 };
+  if (denominator > 1e-9 * sw * sw)
+  {
+    slope[0] = (sw * ski - sk * si) / denominator;
+    slope[1] = (sw * skj - sk * sj) / denominator;
+  }
+  const auto & spacing = sheetMask->GetSpacing();
+  const auto & direction = sheetMask->GetDirection();
+  AxisType     axis;
+  for (unsigned r = 0; r < 3; ++r)
+  {
+    axis[r] =
+      direction[r][0] * spacing[0] * slope[0] + direction[r][1] * spacing[1] * slope[1] + direction[r][2] * spacing[2];
+  }
+  axis.Normalize();
+  return axis;
+}
+
+bool
+SheetRollAxis::Align(SheetImageType::Pointer &     sheetMask,
+                     IntensityImageType::Pointer & sheetIntensity,
+                     SheetImageType::Pointer &     sheetData,
+                     double                        tiltTolerance,
+                     std::vector<std::string> &    warnings)
+{
+  const SheetImageType::Pointer     originalMask = sheetMask;
+  const IntensityImageType::Pointer originalIntensity = sheetIntensity;
+  const auto &                      spacing = originalMask->GetSpacing();
+  const auto &                      direction = originalMask->GetDirection();
+  const auto                        size = originalMask->GetBufferedRegion().GetSize();
+  const double                      inPlane = std::min(spacing[0], spacing[1]);
+  const bool                        square = std::abs(spacing[0] - spacing[1]) <= 1e-6 * inPlane;
+  auto                              angle = [](const AxisType & a, const AxisType & b) {
+    return std::acos(std::clamp(a * b, -1.0, 1.0)) * 180.0 / Math::pi;
+  };
+  auto sliceNormal = [](const SheetImageType * image) {
+    AxisType normal;
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      normal[r] = image->GetDirection()[r][2];
+    }
+    return normal;
+  };
+  const AxisType originalNormal = sliceNormal(originalMask);
+  bool           fromTensor = false;
+  AxisType       axis = Estimate(originalMask, originalIntensity, fromTensor);
+  if (angle(axis, originalNormal) <= tiltTolerance && square)
+  {
+    return fromTensor;
+  }
+  // Each pass resamples the original box along the current estimate. The structure tensor's
+  // estimate is global and needs one; the centroids' is better from a better aligned grid
+  // (partial slices bias it less), so it converges in a few.
+  for (int pass = 0; pass < 4; ++pass)
+  {
+    AxisType firstAxis;
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      firstAxis[r] = direction[r][0];
+    }
+    firstAxis -= (firstAxis * axis) * axis;
+    firstAxis.Normalize();
+    const AxisType                secondAxis = CrossProduct(axis, firstAxis);
+    SheetImageType::DirectionType newDirection;
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      newDirection[r][0] = firstAxis[r];
+      newDirection[r][1] = secondAxis[r];
+      newDirection[r][2] = axis[r];
+    }
+    SheetImageType::SpacingType newSpacing;
+    newSpacing[0] = newSpacing[1] = inPlane;
+    newSpacing[2] = spacing[2];
+    // Bounds of the original box's corners in the new frame.
+    double       lower[3] = { 1e300, 1e300, 1e300 }, upper[3] = { -1e300, -1e300, -1e300 };
+    const auto & origin = originalMask->GetOrigin();
+    for (unsigned corner = 0; corner < 8; ++corner)
+    {
+      SheetImageType::IndexType index;
+      for (unsigned d = 0; d < 3; ++d)
+      {
+        index[d] = (corner >> d) & 1U ? static_cast<IndexValueType>(size[d]) - 1 : 0;
+      }
+      SheetImageType::PointType point;
+      originalMask->TransformIndexToPhysicalPoint(index, point);
+      for (unsigned d = 0; d < 3; ++d)
+      {
+        double coordinate = 0.0;
+        for (unsigned r = 0; r < 3; ++r)
+        {
+          coordinate += newDirection[r][d] * (point[r] - origin[r]);
+        }
+        lower[d] = std::min(lower[d], coordinate);
+        upper[d] = std::max(upper[d], coordinate);
+      }
+    }
+    SheetImageType::PointType newOrigin;
+    SheetImageType::SizeType  newSize;
+    for (unsigned r = 0; r < 3; ++r)
+    {
+      newOrigin[r] =
+        origin[r] + newDirection[r][0] * lower[0] + newDirection[r][1] * lower[1] + newDirection[r][2] * lower[2];
+      newSize[r] = static_cast<SizeValueType>(std::ceil((upper[r] - lower[r]) / newSpacing[r])) + 1;
+    }
+    // Binary images are resampled by nearest neighbour, 0 beyond the original box.
+    auto resampleBinary = [&](const SheetImageType * image) {
+      auto resampler = ResampleImageFilter<SheetImageType, SheetImageType>::New();
+      resampler->SetInput(image);
+      resampler->SetInterpolator(NearestNeighborInterpolateImageFunction<SheetImageType>::New());
+      resampler->SetOutputOrigin(newOrigin);
+      resampler->SetOutputSpacing(newSpacing);
+      resampler->SetOutputDirection(newDirection);
+      resampler->SetSize(newSize);
+      resampler->SetDefaultPixelValue(0);
+      resampler->Update();
+      return SheetImageType::Pointer(resampler->GetOutput());
+    };
+    sheetMask = resampleBinary(originalMask);
+    // Where the resampled box reaches beyond the original one there is no data of the scan:
+    // a sheet cut there by the field of view is unknown, not absent.
+    auto inside = SheetImageType::New();
+    inside->CopyInformation(originalMask);
+    inside->SetRegions(originalMask->GetBufferedRegion());
+    inside->Allocate();
+    inside->FillBuffer(1);
+    sheetData = resampleBinary(inside);
+    if (originalIntensity)
+    {
+      const float * values = originalIntensity->GetBufferPointer();
+      const float air = *std::min_element(values, values + originalIntensity->GetBufferedRegion().GetNumberOfPixels());
+      auto        resampler = ResampleImageFilter<IntensityImageType, IntensityImageType>::New();
+      resampler->SetInput(originalIntensity);
+      resampler->SetOutputOrigin(newOrigin);
+      resampler->SetOutputSpacing(newSpacing);
+      resampler->SetOutputDirection(newDirection);
+      resampler->SetSize(newSize);
+      resampler->SetDefaultPixelValue(air);
+      resampler->Update();
+      sheetIntensity = resampler->GetOutput();
+    }
+    if (fromTensor)
+    {
+      break;
+    }
+    const AxisType refined = EstimateFromCentroids(sheetMask);
+    if (angle(refined, sliceNormal(sheetMask)) <= 0.25 * tiltTolerance)
+    {
+      break;
+    }
+    axis = refined;
+  }
+  std::ostringstream text;
+  text << "the volume was resampled along the roll axis";
+  if (angle(axis, originalNormal) > tiltTolerance)
+  {
+    text << ", which is tilted by " << angle(axis, originalNormal) << " degrees from the slice normal";
+  }
+  else
+  {
+    text << " to square in-plane voxels of " << inPlane;
+  }
+  warnings.push_back(text.str());
+  return fromTensor;
+}
+
+void
+SheetRollAxis::Denoise(const SheetImageType *        sheetMask,
+                       IntensityImageType::Pointer & sheetIntensity,
+                       std::vector<std::string> &    warnings)
+{
+  const size_t       count = sheetMask->GetBufferedRegion().GetNumberOfPixels();
+  const size_t       stride = std::max<size_t>(1, count / 400000);
+  std::vector<float> air, material;
+  const uint8_t *    mask = sheetMask->GetBufferPointer();
+  const float *      values = sheetIntensity->GetBufferPointer();
+  for (size_t i = 0; i < count; i += stride)
+  {
+    (mask[i] != 0 ? material : air).push_back(values[i]);
+  }
+  const SheetIntensityLevels levels = EstimateSheetIntensityLevels(std::move(air), std::move(material));
+  const double               sigma = levels.DenoisingSigma();
+  if (!(sigma > 0.0))
+  {
+    return;
+  }
+  // The slices now cut across the roll axis, along which the sheet does not change: smooth
+  // twice as much along it as across the sheet.
+  const auto & spacing = sheetIntensity->GetSpacing();
+  SmoothingRecursiveGaussianImageFilter<IntensityImageType, IntensityImageType>::SigmaArrayType sigmas;
+  sigmas[0] = sigma * spacing[0];
+  sigmas[1] = sigma * spacing[1];
+  sigmas[2] = 2.0 * sigma * spacing[2];
+  auto smoothing = SmoothingRecursiveGaussianImageFilter<IntensityImageType, IntensityImageType>::New();
+  smoothing->SetInput(sheetIntensity);
+  smoothing->SetSigmaArray(sigmas);
+  smoothing->Update();
+  sheetIntensity = smoothing->GetOutput();
+  std::ostringstream text;
+  text << "noisy scan (sheet contrast " << levels.SignalToNoise()
+       << " times the noise): intensities smoothed for tracing, Gaussian sigma " << sigma << " voxel across and "
+       << 2.0 * sigma << " along the roll axis";
+  warnings.push_back(text.str());
+}
+} // end namespace itk

@@ -1,0 +1,686 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#include "vuSheetExtraction.h"
+#include "vuMedian.h"
+#include "vuPolyline.h"
+#include "vuRollTracer.h"
+#include "vuSheetGrid.h"
+
+#include "itkMacro.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace itk {
+namespace SheetTracing {
+namespace {
+constexpr double Pi = 3.14159265358979323846;
+// Sideways step of the finished mesh, as a fraction of the turn spacing, reported as a
+// possible layer jump: a jump onto the next turn steps by about a whole turn spacing, while
+// the sharpest bend of a correct mesh (the innermost curl, a trace's end) stayed below 0.55
+// on the stress family's scans.
+constexpr double GridStepFraction = 0.7;
+
+using RollTracing::Median;
+
+// Slices at most by which the mesh reaches past the last well-traced slice along the axis.
+constexpr long EdgeSlices = 8;
+} // namespace
+
+SheetMesh
+Extraction::Run()
+{
+  CheckInput();
+  FitAxis();
+  MeasureLevels();
+  TraceSlices();
+  SelectSlices();
+  MeasureSheet();
+  ResampleColumns();
+  ChooseRowSpacing();
+  return BuildMesh();
+}
+
+void
+Extraction::CheckInput() const
+{
+  if (volume.Mask == nullptr)
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: no mask given");
+  }
+  if (volume.Size[0] < 3 || volume.Size[1] < 3 || volume.Size[2] < 2)
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: volume of " << volume.Size[0] << "x" << volume.Size[1] << "x"
+                             << volume.Size[2] << " voxels is too small (at least 3x3x2)");
+  }
+  for (double spacing : volume.Spacing)
+  {
+    if (!(spacing > 0.0) || !std::isfinite(spacing))
+    {
+      itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: voxel spacing must be positive");
+    }
+  }
+  if (!(parameters.SpacingAlongSheet >= 0.0) || !(parameters.SpacingAlongAxis >= 0.0) ||
+      !(parameters.ChordErrorFraction > 0.0 && parameters.ChordErrorFraction <= 1.0))
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: mesh spacings must be >= 0 and the chord error fraction "
+                                "in (0, 1]");
+  }
+  if (std::abs(sx - sy) > 1e-6 * voxel)
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: in-plane voxels must be square (spacing " << sx << " x "
+                             << sy << "); resample the volume first");
+  }
+}
+
+void
+Extraction::report(double fraction) const
+{
+  if (progress && !progress(fraction))
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: aborted");
+  }
+}
+
+void
+Extraction::FitAxis()
+{
+  // Per-slice material and centroids; the roll axis is the line through the centroids.
+  area.assign(nz, 0.0);
+  std::vector<double> centroidX(nz, 0.0), centroidY(nz, 0.0);
+  for (size_t k = 0; k < nz; ++k)
+  {
+    const uint8_t * mask = volume.Mask + k * nx * ny;
+    double          count = 0.0, mx = 0.0, my = 0.0;
+    for (size_t j = 0; j < ny; ++j)
+    {
+      for (size_t i = 0; i < nx; ++i)
+      {
+        if (mask[j * nx + i] != 0)
+        {
+          count += 1.0;
+          mx += static_cast<double>(i) * sx;
+          my += static_cast<double>(j) * sy;
+        }
+      }
+    }
+    area[k] = count * sx * sy;
+    if (count > 0.0)
+    {
+      centroidX[k] = mx / count;
+      centroidY[k] = my / count;
+      ++m_Report.SlicesWithMaterial;
+    }
+  }
+  if (m_Report.SlicesWithMaterial == 0)
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: the mask is empty");
+  }
+  {
+    double sw = 0, sz1 = 0, szz = 0, sxw = 0, syw = 0, szx = 0, szy = 0;
+    for (size_t k = 0; k < nz; ++k)
+    {
+      const double weight = area[k], z = static_cast<double>(k) * sz;
+      sw += weight;
+      sz1 += weight * z;
+      szz += weight * z * z;
+      sxw += weight * centroidX[k];
+      syw += weight * centroidY[k];
+      szx += weight * z * centroidX[k];
+      szy += weight * z * centroidY[k];
+    }
+    const double denominator = sw * szz - sz1 * sz1;
+    if (!volume.AxisAlongSlices && denominator > 1e-12 * sw * sw)
+    {
+      m_Report.AxisSlope[0] = (sw * szx - sz1 * sxw) / denominator;
+      m_Report.AxisSlope[1] = (sw * szy - sz1 * syw) / denominator;
+    }
+    m_Report.AxisCentre[0] = (sxw - m_Report.AxisSlope[0] * sz1) / sw;
+    m_Report.AxisCentre[1] = (syw - m_Report.AxisSlope[1] * sz1) / sw;
+  }
+}
+
+void
+Extraction::MeasureLevels()
+{
+  context.Voxel = voxel;
+  if (volume.Intensity != nullptr)
+  {
+    // Air and material levels: medians of a sample of the voxels outside and inside the mask.
+    std::vector<double> outside, inside;
+    const size_t        total = nx * ny * nz;
+    const size_t        stride = std::max<size_t>(1, total / 400000);
+    for (size_t i = 0; i < total; i += stride)
+    {
+      (volume.Mask[i] != 0 ? inside : outside).push_back(volume.Intensity[i]);
+    }
+    context.AirLevel = Median(outside);
+    context.SheetLevel = Median(inside);
+    context.Base = 0.5 * (context.AirLevel + context.SheetLevel);
+  }
+}
+
+void
+Extraction::TraceSlices()
+{
+  traces.assign(nz, {});
+  auto traceGeneral = [&](double progressStart, double progressEnd) {
+    // ITK's 2D filters inside run single-threaded; nesting them in the pool could stall it.
+    for (size_t k = 0; k < nz; ++k)
+    {
+      if (area[k] > 0.0)
+      {
+        traces[k] = TraceGeneralSlice(SliceSampler(volume, k), context, sy);
+      }
+      report(progressStart + (progressEnd - progressStart) * static_cast<double>(k + 1) / static_cast<double>(nz));
+    }
+  };
+
+  method = parameters.Method;
+  if (method != SheetSurfaceMethodEnum::General)
+  {
+    // The roll tracer reads intensities; a mask alone serves as a 0/1 intensity.
+    std::vector<float>    maskValues;
+    RollTracing::Settings settings;
+    settings.Voxel = voxel;
+    settings.SliceSpacing = sz;
+    settings.AirLevel = context.AirLevel;
+    settings.SheetLevel = context.SheetLevel;
+    if (volume.Intensity == nullptr)
+    {
+      maskValues.resize(nx * ny * nz);
+      std::transform(
+        volume.Mask, volume.Mask + nx * ny * nz, maskValues.begin(), [](uint8_t v) { return v != 0 ? 1.0f : 0.0f; });
+      settings.AirLevel = 0.0;
+      settings.SheetLevel = 1.0;
+    }
+    for (int d = 0; d < 2; ++d)
+    {
+      settings.AxisCentre[d] = m_Report.AxisCentre[d];
+      settings.AxisSlope[d] = m_Report.AxisSlope[d];
+    }
+    const double rollShare = method == SheetSurfaceMethodEnum::Auto ? 0.4 : 0.8;
+    const auto   roll = RollTracing::TraceRoll(volume,
+                                             volume.Intensity != nullptr ? volume.Intensity : maskValues.data(),
+                                             settings,
+                                             [&](double fraction) { report(rollShare * fraction); });
+    if (method == SheetSurfaceMethodEnum::Auto)
+    {
+      method = roll.Rolled ? SheetSurfaceMethodEnum::Roll : SheetSurfaceMethodEnum::General;
+    }
+    else if (!roll.Rolled)
+    {
+      m_Report.Warnings.emplace_back("the roll tracer does not find a spiral of at least one turn through most of "
+                                     "the sheet's crossings: the sheet may not be rolled (try the general method)");
+    }
+    if (method == SheetSurfaceMethodEnum::Roll)
+    {
+      m_Report.SliceConfidence.assign(nz, -1.0);
+      for (size_t k = 0; k < nz; ++k)
+      {
+        traces[k] = roll.Slices[k].Line;
+        if (area[k] > 0.0)
+        {
+          m_Report.SliceConfidence[k] = traces[k].empty() ? 0.0 : roll.Slices[k].Confirmed;
+        }
+      }
+      m_Report.TurnSpacing = roll.Pitch;
+      m_Report.Turns = roll.Slices[nz / 2].Turns;
+      if (roll.Incomplete > 0)
+      {
+        std::ostringstream text;
+        text << roll.Incomplete
+             << " slice(s) traced only in part (their trace ends far from the other slices' ends: the sheet's edge "
+                "along the axis, or a trace lost before the end) were left out or interpolated";
+        m_Report.Warnings.push_back(text.str());
+      }
+      for (const auto & [slice, turn] : roll.Disagreements)
+      {
+        m_Report.LayerJumps.push_back({ slice, turn });
+      }
+      if (!m_Report.LayerJumps.empty())
+      {
+        std::ostringstream text;
+        text << "the traces of " << m_Report.LayerJumps.size()
+             << " slice(s) disagree with their neighbour's by more than half a turn (possible layer jumps), first at "
+                "slice "
+             << m_Report.LayerJumps.front().Slice << ", turn " << m_Report.LayerJumps.front().Turn;
+        m_Report.Warnings.push_back(text.str());
+      }
+    }
+  }
+  if (method == SheetSurfaceMethodEnum::General)
+  {
+    traceGeneral(parameters.Method == SheetSurfaceMethodEnum::Auto ? 0.4 : 0.0, 0.8);
+  }
+  m_Report.Method = method;
+}
+
+void
+Extraction::SelectSlices()
+{
+  lengths.assign(nz, 0.0);
+  std::vector<double> traced;
+  for (size_t k = 0; k < nz; ++k)
+  {
+    if (PolylineSize(traces[k]) >= 2)
+    {
+      lengths[k] = ArcLength(traces[k]);
+      traced.push_back(lengths[k]);
+    }
+  }
+  if (traced.empty())
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: no slice of the mask could be traced as a sheet");
+  }
+  referenceLength = Median(traced);
+  if (referenceLength < 2.0 * voxel)
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: the traced sheet is only " << referenceLength
+                             << " mm long, less than two voxels");
+  }
+  // Slices whose traced length is close to the median (for a roll: the median of the
+  // slices within five of it, since a roll's radius may change along its axis); the others
+  // (cut short, or with a wrong turn) are interpolated from their neighbours.
+  expectedLength.assign(nz, referenceLength);
+  if (method == SheetSurfaceMethodEnum::Roll)
+  {
+    for (size_t k = 0; k < nz; ++k)
+    {
+      std::vector<double> around;
+      for (size_t j = k > 5 ? k - 5 : 0; j <= std::min(nz - 1, k + 5); ++j)
+      {
+        if (lengths[j] > 0.0)
+        {
+          around.push_back(lengths[j]);
+        }
+      }
+      expectedLength[k] = around.empty() ? referenceLength : Median(around);
+    }
+  }
+  // A slice that cuts the sheet's edge along the axis holds only part of it (blurred, half
+  // as bright): its trace is neither the sheet's middle nor its texture.
+  std::vector<double> areas;
+  for (size_t k = 0; k < nz; ++k)
+  {
+    if (lengths[k] > 0.0)
+    {
+      areas.push_back(area[k]);
+    }
+  }
+  partialArea = 0.75 * Median(areas);
+  good.assign(nz, 0);
+  SelectGood(0.05 * referenceLength + 3.0 * voxel);
+  if (method == SheetSurfaceMethodEnum::General)
+  {
+    OrientLikeMiddle();
+  }
+}
+
+void
+Extraction::SelectGood(double tolerance)
+{
+  firstGood = lastGood = -1;
+  for (size_t k = 0; k < nz; ++k)
+  {
+    good[k] = lengths[k] > 0.0 && std::abs(lengths[k] - expectedLength[k]) <= tolerance && area[k] >= partialArea;
+    if (good[k])
+    {
+      firstGood = firstGood < 0 ? static_cast<long>(k) : firstGood;
+      lastGood = static_cast<long>(k);
+    }
+  }
+  if (lastGood <= firstGood)
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: the sheet could be traced in one slice only; the volume "
+                                "is too small along the roll axis");
+  }
+}
+
+void
+Extraction::OrientLikeMiddle()
+{
+  // Orient every slice like the middle one: the end nearer its first point comes first.
+  std::vector<long> goodSlices;
+  for (long k = firstGood; k <= lastGood; ++k)
+  {
+    if (good[k])
+    {
+      goodSlices.push_back(k);
+    }
+  }
+  // The middle slice starts at its end nearer the axis (the inner end of a roll).
+  Polyline &   middle = traces[goodSlices[goodSlices.size() / 2]];
+  const size_t count = PolylineSize(middle);
+  const double axis[2] = { m_Report.AxisCentre[0] + m_Report.AxisSlope[0] * goodSlices[goodSlices.size() / 2] * sz,
+                           m_Report.AxisCentre[1] + m_Report.AxisSlope[1] * goodSlices[goodSlices.size() / 2] * sz };
+  if (std::hypot(middle[2 * count - 2] - axis[0], middle[2 * count - 1] - axis[1]) <
+      std::hypot(middle[0] - axis[0], middle[1] - axis[1]))
+  {
+    for (size_t i = 0; i < count / 2; ++i)
+    {
+      std::swap(middle[2 * i], middle[2 * (count - 1 - i)]);
+      std::swap(middle[2 * i + 1], middle[2 * (count - 1 - i) + 1]);
+    }
+  }
+  const Polyline reference = middle;
+  for (long k : goodSlices)
+  {
+    Polyline &   line = traces[k];
+    const size_t n = PolylineSize(line);
+    const double toFirst = std::hypot(line[0] - reference[0], line[1] - reference[1]);
+    const double toLast = std::hypot(line[2 * n - 2] - reference[0], line[2 * n - 1] - reference[1]);
+    if (toLast < toFirst)
+    {
+      for (size_t i = 0; i < n / 2; ++i)
+      {
+        std::swap(line[2 * i], line[2 * (n - 1 - i)]);
+        std::swap(line[2 * i + 1], line[2 * (n - 1 - i) + 1]);
+      }
+    }
+  }
+}
+
+void
+Extraction::MeasureSheet()
+{
+  // Thickness and the smallest radius of curvature, from the well-traced slices.
+  std::vector<double> thicknesses, radii;
+  size_t              goodCount = 0;
+  for (long k = firstGood; k <= lastGood; ++k)
+  {
+    goodCount += good[k] ? 1 : 0;
+  }
+  const size_t sampleEvery = std::max<size_t>(1, goodCount / 12);
+  size_t       index = 0;
+  for (long k = firstGood; k <= lastGood; ++k)
+  {
+    if (!good[k])
+    {
+      continue;
+    }
+    thicknesses.push_back(area[k] / lengths[k]);
+    if (index++ % sampleEvery != 0)
+    {
+      continue;
+    }
+    const size_t   points = std::max<size_t>(3, static_cast<size_t>(lengths[k] / (0.5 * voxel)));
+    const Polyline even = ResampleEvenly(traces[k], points);
+    const double   step = lengths[k] / static_cast<double>(points - 1);
+    m_Report.SheetThickness = Median(thicknesses);
+    const auto offset =
+      std::max<size_t>(1, static_cast<size_t>(std::ceil(2.0 * std::max(m_Report.SheetThickness, voxel) / step)));
+    for (size_t i = offset; i + offset < points; ++i)
+    {
+      radii.push_back(Circumradius(&even[2 * (i - offset)], &even[2 * i], &even[2 * (i + offset)]));
+    }
+  }
+  m_Report.SheetThickness = Median(thicknesses);
+  m_Report.SheetLength = referenceLength;
+  m_Report.MinimumCurvatureRadius = radii.empty() ? referenceLength : Percentile(radii, 0.05);
+  if (!std::isfinite(m_Report.MinimumCurvatureRadius))
+  {
+    m_Report.MinimumCurvatureRadius = referenceLength;
+  }
+  const double automatic = std::max(
+    voxel, std::sqrt(8.0 * m_Report.MinimumCurvatureRadius * parameters.ChordErrorFraction * m_Report.SheetThickness));
+  hs = parameters.SpacingAlongSheet > 0.0 ? parameters.SpacingAlongSheet : automatic;
+  hw = parameters.SpacingAlongAxis > 0.0 ? parameters.SpacingAlongAxis : std::max(hs, sz);
+}
+
+void
+Extraction::ResampleColumns()
+{
+  // A slice shorter or longer than the median by a sizeable part of a column would shear
+  // the grid: the columns sit at the same fraction of every slice's length.
+  // (The roll tracer has already matched each slice's ends to its neighbours'.)
+  if (method == SheetSurfaceMethodEnum::General)
+  {
+    SelectGood(std::min(0.05 * referenceLength, std::max(0.25 * hs, 2.0 * voxel)) + voxel);
+  }
+
+  columns = static_cast<size_t>(std::max(2.0, std::ceil(referenceLength / hs) + 1.0));
+  if (columns * (static_cast<size_t>((lastGood - firstGood) * sz / hw) + 2) > (size_t{ 1 } << 31))
+  {
+    itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: mesh spacing " << hs << " x " << hw
+                             << " mm gives more than 2^31 points");
+  }
+  // Columns at the same fraction of each slice's traced length; failed slices in between
+  // are interpolated from the nearest good ones.
+  columnsOf.assign(nz, {});
+  for (long k = firstGood; k <= lastGood; ++k)
+  {
+    if (good[k])
+    {
+      columnsOf[k] = ResampleEvenly(traces[k], columns);
+    }
+  }
+  AlignColumns();
+  for (long k = firstGood; k <= lastGood; ++k)
+  {
+    if (good[k])
+    {
+      continue;
+    }
+    long before = k - 1, after = k + 1;
+    while (!good[before])
+    {
+      --before;
+    }
+    while (!good[after])
+    {
+      ++after;
+    }
+    const double t = static_cast<double>(k - before) / static_cast<double>(after - before);
+    columnsOf[k].resize(2 * columns);
+    for (size_t i = 0; i < 2 * columns; ++i)
+    {
+      columnsOf[k][i] = (1.0 - t) * columnsOf[before][i] + t * columnsOf[after][i];
+    }
+    ++m_Report.InterpolatedSlices;
+  }
+  if (m_Report.InterpolatedSlices > 0)
+  {
+    std::ostringstream text;
+    text << m_Report.InterpolatedSlices << " slice(s) inside the sheet could not be traced and were interpolated";
+    m_Report.Warnings.push_back(text.str());
+  }
+}
+
+// The traced ends of a slice jitter by a fraction of a voxel, which shifts its columns
+// along the sheet and makes the grid slightly non-developable (the flattener then has to
+// strain or crease it). Align every good slice along the sheet to the mean of its good
+// neighbours within five slices: the tangential offsets of its columns are fitted by
+// a + b c and the slice is resampled at the corrected arc lengths.
+
+void
+Extraction::AlignColumns()
+{
+  const long            reach = 5;
+  std::vector<Polyline> aligned(columnsOf);
+  for (long k = firstGood; k <= lastGood; ++k)
+  {
+    if (!good[k])
+    {
+      continue;
+    }
+    Polyline reference(2 * columns, 0.0);
+    double   neighbours = 0.0;
+    for (long j = std::max(firstGood, k - reach); j <= std::min(lastGood, k + reach); ++j)
+    {
+      if (good[j] && j != k)
+      {
+        for (size_t i = 0; i < 2 * columns; ++i)
+        {
+          reference[i] += columnsOf[j][i];
+        }
+        neighbours += 1.0;
+      }
+    }
+    if (neighbours == 0.0)
+    {
+      continue;
+    }
+    for (double & value : reference)
+    {
+      value /= neighbours;
+    }
+    double sc = 0.0, so = 0.0, scc = 0.0, sco = 0.0;
+    for (size_t c = 0; c < columns; ++c)
+    {
+      const size_t a = c > 0 ? c - 1 : c, b = c + 1 < columns ? c + 1 : c;
+      double       tx = reference[2 * b] - reference[2 * a], ty = reference[2 * b + 1] - reference[2 * a + 1];
+      const double norm = std::hypot(tx, ty);
+      if (norm <= 0.0)
+      {
+        continue;
+      }
+      const double offset =
+        ((columnsOf[k][2 * c] - reference[2 * c]) * tx + (columnsOf[k][2 * c + 1] - reference[2 * c + 1]) * ty) / norm;
+      const auto x = static_cast<double>(c);
+      sc += x;
+      so += offset;
+      scc += x * x;
+      sco += x * offset;
+    }
+    const auto   n = static_cast<double>(columns);
+    const double denominator = n * scc - sc * sc;
+    if (denominator <= 0.0)
+    {
+      continue;
+    }
+    const double        slope = (n * sco - sc * so) / denominator;
+    const double        intercept = (so - slope * sc) / n;
+    std::vector<double> arcs(columns);
+    for (size_t c = 0; c < columns; ++c)
+    {
+      arcs[c] = lengths[k] * static_cast<double>(c) / static_cast<double>(columns - 1) - intercept -
+                slope * static_cast<double>(c);
+    }
+    aligned[k] = SampleAtArcLengths(traces[k], KeepWithinTrace(arcs, lengths[k]));
+  }
+  columnsOf = std::move(aligned);
+}
+
+void
+Extraction::ChooseRowSpacing()
+{
+  // Along the axis the sheet bends too (a radius that changes along the roll, a skewed
+  // end): rows far apart, joined by straight edges, would cut through the gaps between
+  // turns. The automatic row spacing h is the largest (at most the one above) at which the
+  // curves of the slices deviate from the chord between slices h apart by no more than the
+  // chord error f t, above the deviation the noise of the traces makes between neighbouring
+  // slices (95th percentile over columns and slices).
+  if (!(parameters.SpacingAlongAxis > 0.0) && lastGood - firstGood >= 4)
+  {
+    auto deviation = [&](long d) {
+      std::vector<double> values;
+      const size_t        stride = std::max<size_t>(1, columns / 200);
+      for (long k = firstGood + d; k + d <= lastGood; k += std::max(1L, d / 2))
+      {
+        for (size_t c = 0; c < columns; c += stride)
+        {
+          const double ex = 0.5 * (columnsOf[k - d][2 * c] + columnsOf[k + d][2 * c]) - columnsOf[k][2 * c];
+          const double ey = 0.5 * (columnsOf[k - d][2 * c + 1] + columnsOf[k + d][2 * c + 1]) - columnsOf[k][2 * c + 1];
+          values.push_back(std::hypot(ex, ey));
+        }
+      }
+      return values.empty() ? 0.0 : Percentile(values, 0.95);
+    };
+    const double noise = deviation(1);
+    const double tolerance = parameters.ChordErrorFraction * std::max(m_Report.SheetThickness, voxel);
+    auto         half = static_cast<long>(std::floor(0.5 * hw / sz));
+    while (half >= 2 && 2 * half <= lastGood - firstGood && deviation(half) > noise + tolerance)
+    {
+      half = static_cast<long>(std::floor(0.75 * static_cast<double>(half)));
+    }
+    hw = std::max(sz, std::min(hw, 2.0 * static_cast<double>(std::max(half, 1L)) * sz));
+  }
+  const double tilt = std::atan(std::hypot(m_Report.AxisSlope[0], m_Report.AxisSlope[1])) * 180.0 / Pi;
+  if (method == SheetSurfaceMethodEnum::Roll && tilt > 2.0)
+  {
+    std::ostringstream text;
+    text << "the roll axis is tilted by " << tilt << " degrees from the slice normal";
+    m_Report.Warnings.push_back(text.str());
+  }
+}
+
+SheetMesh
+Extraction::BuildMesh()
+{
+  // Rows: triangular-weighted average of the slices within one row spacing. Where slices
+  // beyond the first or last good one hold the sheet (its edge along the axis), the mesh
+  // reaches over them, and half a slice further to the middle of the last one's voxels,
+  // on the curve of the last good slice.
+  // Slices beyond the good ones that still hold most of a slice's material (traces lost
+  // in the faint, blurred slices at the sheet's edge along the axis) are covered too, on
+  // the curve of the nearest good slice, up to a few slices.
+  const double fullArea = partialArea / 0.75;
+  auto         reach = [&](long from, long dir) {
+    long k = from + dir;
+    while (k >= 0 && k < static_cast<long>(nz) && std::abs(k - from) <= EdgeSlices && area[k] >= 0.5 * fullArea)
+    {
+      k += dir;
+    }
+    const long covered = std::abs(k - from) - 1;
+    const bool edge = k >= 0 && k < static_cast<long>(nz) && area[k] > 0.0;
+    return static_cast<double>(covered) * sz + (covered > 0 || edge ? 0.5 * sz : 0.0);
+  };
+  const double below = reach(firstGood, -1);
+  const double above = reach(lastGood, +1);
+  const double span = static_cast<double>(lastGood - firstGood) * sz + below + above;
+  const auto   rows = static_cast<size_t>(std::max(2.0, std::ceil(span / hw) + 1.0));
+  const double rowSpacing = span / static_cast<double>(rows - 1);
+  // Slices whose point lies farther than this from the row's median point are left out of
+  // its mean: where a turn is pushed onto the next one in some slices of a row's window and
+  // not in others (a touch's edge along the axis), the mean would lie between the two, in
+  // the gap or on the neighbouring turn.
+  const double agreement = 0.5 * std::max(m_Report.SheetThickness, voxel);
+  SheetMesh    mesh = BuildSheetGrid(columnsOf, firstGood, lastGood, sz, below, rows, rowSpacing, columns, agreement);
+  if (method == SheetSurfaceMethodEnum::Roll)
+  {
+    OrientNormalsToAxis(mesh, m_Report.AxisCentre, m_Report.AxisSlope);
+  }
+  m_Report.SpacingAlongSheet = referenceLength / static_cast<double>(columns - 1);
+  m_Report.SpacingAlongAxis = rowSpacing;
+  if (method == SheetSurfaceMethodEnum::Roll && m_Report.TurnSpacing > 0.0)
+  {
+    // A layer jump the slice-to-slice check missed shows on the mesh as a sideways step
+    // of about a turn spacing.
+    m_Report.GridSteps = SheetMidSurfaceExtractor::FindGridSteps(mesh, GridStepFraction * m_Report.TurnSpacing);
+    for (auto & step : m_Report.GridSteps)
+    {
+      const double z = mesh.Points[3 * (step.Row * columns + step.Column) + 2];
+      step.Slice = static_cast<size_t>(std::clamp(std::lround(z / sz), 0L, static_cast<long>(nz) - 1));
+    }
+    if (!m_Report.GridSteps.empty())
+    {
+      const auto &       first = m_Report.GridSteps.front();
+      std::ostringstream text;
+      text << "the mesh steps sideways by more than " << GridStepFraction << " of the turn spacing at "
+           << m_Report.GridSteps.size() << " place(s) (possible layer jumps), first at grid row " << first.Row
+           << ", column " << first.Column << " (slice " << first.Slice << ")";
+      m_Report.Warnings.push_back(text.str());
+    }
+  }
+  report(1.0);
+  return mesh;
+}
+} // namespace SheetTracing
+} // end namespace itk

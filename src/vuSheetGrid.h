@@ -1,0 +1,52 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef vuSheetGrid_h
+#define vuSheetGrid_h
+
+#include "itkSheetMesh.h"
+#include "vuPolyline.h"
+
+#include <utility>
+#include <vector>
+
+namespace itk {
+namespace SheetTracing {
+/** The grid mesh of a sheet from its slices' columns (`columnsOf[k]`: `columns` points of
+ * slice k, for every slice from firstGood to lastGood). Row r lies at z = firstGood * sz -
+ * below + r * rowSpacing: the triangular-weighted mean of the slices within one row
+ * spacing (at least one slice), leaving out the slices whose point lies farther than
+ * `agreement` from the row's weighted median point. Triangles with normals dP/dw x dP/ds. */
+SheetMesh
+BuildSheetGrid(const std::vector<Polyline> & columnsOf,
+               long                          firstGood,
+               long                          lastGood,
+               double                        sz,
+               double                        below,
+               size_t                        rows,
+               double                        rowSpacing,
+               size_t                        columns,
+               double                        agreement);
+
+/** Turns the mesh's triangles over unless their normals point, on the whole, to the axis
+ * through axisCentre (at z = 0) with drift axisSlope per mm of z (the inside face of a roll). */
+void
+OrientNormalsToAxis(SheetMesh & mesh, const double axisCentre[2], const double axisSlope[2]);
+} // namespace SheetTracing
+} // end namespace itk
+
+#endif
