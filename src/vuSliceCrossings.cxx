@@ -173,17 +173,21 @@ Tracer::Peaks(const std::vector<double> & p) const
   }
   // Merge peaks closer than 1.2 voxels or not separated by a dip: keep the higher.
   const long minimumSeparation = static_cast<long>(std::ceil(1.2 * m_Settings.Voxel / m_Frame.Dr));
-  bool       changed = true;
+  // The first pair that merges, again and again: the pairs before the one a merge changed
+  // were kept and are not looked at again.
+  bool   changed = true;
+  size_t from = 0;
   while (changed && peaks.size() > 1)
   {
     changed = false;
-    for (size_t q = 0; q + 1 < peaks.size(); ++q)
+    for (size_t q = from; q + 1 < peaks.size(); ++q)
     {
       const long   a = peaks[q], b = peaks[q + 1];
       const double dip = *std::min_element(p.begin() + a, p.begin() + b + 1);
       if (b - a < minimumSeparation || std::min(p[a], p[b]) - dip < prominence)
       {
         peaks.erase(peaks.begin() + static_cast<std::ptrdiff_t>(p[a] >= p[b] ? q + 1 : q));
+        from = q > 0 ? q - 1 : 0;
         changed = true;
         break;
       }
