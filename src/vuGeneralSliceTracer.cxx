@@ -162,14 +162,13 @@ TraceGeneralSlice(const SliceSampler & sampler, const TraceContext & context, do
   const size_t n = PolylineSize(line);
   for (size_t i = 0; i < n; ++i)
   {
-    const size_t a = i > 0 ? i - 1 : i, b = i + 1 < n ? i + 1 : i;
-    double       tx = line[2 * b] - line[2 * a], ty = line[2 * b + 1] - line[2 * a + 1];
-    const double norm = std::hypot(tx, ty);
+    double       chord[2];
+    const double norm = NeighbourChord(line, i, chord);
     if (norm <= 0.0)
     {
       continue;
     }
-    const double normal[2] = { -ty / norm, tx / norm };
+    const double normal[2] = { -chord[1] / norm, chord[0] / norm };
     const double point[2] = { line[2 * i], line[2 * i + 1] };
     const double shift =
       std::clamp(CentreAlongLine(sampler, context, point, normal, -reach, reach, 0.25 * context.Voxel),

@@ -175,6 +175,16 @@ KeepWithinTrace(std::vector<double> arcs, double length)
   return arcs;
 }
 
+double
+NeighbourChord(const Polyline & line, size_t i, double chord[2])
+{
+  const size_t n = PolylineSize(line);
+  const size_t a = i > 0 ? i - 1 : i, b = i + 1 < n ? i + 1 : i;
+  chord[0] = line[2 * b] - line[2 * a];
+  chord[1] = line[2 * b + 1] - line[2 * a + 1];
+  return std::hypot(chord[0], chord[1]);
+}
+
 // Circumradius of three points.
 double
 Circumradius(const double a[2], const double b[2], const double c[2])

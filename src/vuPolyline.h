@@ -55,6 +55,11 @@ SampleAtArcLengths(const Polyline & line, const std::vector<double> & arcs);
 std::vector<double>
 KeepWithinTrace(std::vector<double> arcs, double length);
 
+// The chord between the neighbours of point i (the point itself at an end) in `chord`, and
+// its length.
+double
+NeighbourChord(const Polyline & line, size_t i, double chord[2]);
+
 // Circumradius of three points.
 double
 Circumradius(const double a[2], const double b[2], const double c[2]);

@@ -544,15 +544,15 @@ Extraction::AlignColumns()
     double sc = 0.0, so = 0.0, scc = 0.0, sco = 0.0;
     for (size_t c = 0; c < columns; ++c)
     {
-      const size_t a = c > 0 ? c - 1 : c, b = c + 1 < columns ? c + 1 : c;
-      double       tx = reference[2 * b] - reference[2 * a], ty = reference[2 * b + 1] - reference[2 * a + 1];
-      const double norm = std::hypot(tx, ty);
+      double       chord[2];
+      const double norm = NeighbourChord(reference, c, chord);
       if (norm <= 0.0)
       {
         continue;
       }
-      const double offset =
-        ((columnsOf[k][2 * c] - reference[2 * c]) * tx + (columnsOf[k][2 * c + 1] - reference[2 * c + 1]) * ty) / norm;
+      const double offset = ((columnsOf[k][2 * c] - reference[2 * c]) * chord[0] +
+                             (columnsOf[k][2 * c + 1] - reference[2 * c + 1]) * chord[1]) /
+                            norm;
       const auto x = static_cast<double>(c);
       sc += x;
       so += offset;

@@ -100,9 +100,7 @@ SampleRay(const ValueSlice & slice,
   {
     const double r = static_cast<double>(j) * dr;
     const double x = centre[0] + r * direction[0], y = centre[1] + r * direction[1];
-    double       sum = 0.0;
-    sum += slice.Value(x, y, air);
-    out[j] = static_cast<float>((sum / 1.0 - air) / contrast);
+    out[j] = static_cast<float>((slice.Value(x, y, air) - air) / contrast);
   }
 }
 } // namespace
