@@ -232,14 +232,18 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::MeshLabels(const TLabelImage
     sheetIntensity->Allocate();
   }
   {
-    // Row by row, the slices in parallel; the intensities lie where the labels do.
+    // Row by row, the slices in parallel; the intensities lie where the labels do. When
+    // every sheet is meshed, the other pieces and split sheets are sheets of their own (or
+    // too small to be one): their material is marked 2 and hidden from the tracers. For the
+    // largest sheet alone, pieces not meshed with it (arcs of turns the tracer did not
+    // take as its own, specks) stay as they are in the scan.
     const auto boxSize = box.GetSize();
     ForEachImageRow(source, box, [&](SizeValueType k, SizeValueType j, const auto * label) {
       const SizeValueType to = (k * boxSize[1] + j) * boxSize[0];
       uint8_t *           out = sheetMask->GetBufferPointer() + to;
       for (SizeValueType i = 0; i < boxSize[0]; ++i)
       {
-        out[i] = kept(label[i]) ? 1 : 0;
+        out[i] = kept(label[i]) ? 1 : (m_EverySheet && label[i] != 0 ? 2 : 0);
       }
       if (intensity != nullptr)
       {
@@ -249,6 +253,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::MeshLabels(const TLabelImage
       }
     });
   }
+  SheetRollAxis::HideOtherSheets(sheetMask, sheetIntensity);
   typename SheetImageType::Pointer sheetData;
   const bool axisKnown = SheetRollAxis::Align(sheetMask, sheetIntensity, sheetData, m_AxisTiltTolerance, warnings);
   if (sheetIntensity)

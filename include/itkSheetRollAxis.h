@@ -44,7 +44,11 @@ namespace itk {
  * Denoise(): smooths the intensities of a noisy scan for tracing
  * (SheetIntensityLevels::DenoisingSigma across the sheet, twice that along the roll axis);
  * a clean scan is left as it is.
- * Each adds a line to `warnings` for what it changed.
+ * HideOtherSheets(): in a box whose mask marks the sheet 1 and the material of other sheets
+ * 2, the other sheets' voxels and their rims (the voxels within two voxels of them and not
+ * of this sheet) take values of the box's own air, drawn from it in a fixed order, so that no
+ * tracer follows a neighbouring page or fragment; the mask is left 0 / 1.
+ * Align() and Denoise() each add a line to `warnings` for what they changed.
  * \ingroup VirtualUnwrapping
  */
 class VirtualUnwrapping_EXPORT SheetRollAxis
@@ -64,6 +68,8 @@ public:
         SheetImageType::Pointer &     sheetData,
         double                        tiltTolerance,
         std::vector<std::string> &    warnings);
+  static void
+  HideOtherSheets(SheetImageType * sheetMask, IntensityImageType * sheetIntensity);
   static void
   Denoise(const SheetImageType *        sheetMask,
           IntensityImageType::Pointer & sheetIntensity,

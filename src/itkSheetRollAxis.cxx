@@ -16,6 +16,8 @@
  *
  *=========================================================================*/
 #include "itkSheetRollAxis.h"
+#include "itkBinaryBallStructuringElement.h"
+#include "itkBinaryDilateImageFilter.h"
 #include "itkGradientRecursiveGaussianImageFilter.h"
 #include "itkNearestNeighborInterpolateImageFunction.h"
 #include "itkParallelImageRows.h"
@@ -26,6 +28,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <random>
 #include <sstream>
 
 #include "vnl/algo/vnl_determinant.h"
@@ -340,6 +343,80 @@ SheetRollAxis::Align(SheetImageType::Pointer &     sheetMask,
   }
   warnings.push_back(text.str());
   return fromTensor;
+}
+
+void
+SheetRollAxis::HideOtherSheets(SheetImageType * sheetMask, IntensityImageType * sheetIntensity)
+{
+  uint8_t *    mask = sheetMask->GetBufferPointer();
+  const size_t count = sheetMask->GetBufferedRegion().GetNumberOfPixels();
+  if (std::none_of(mask, mask + count, [](uint8_t v) { return v == 2; }))
+  {
+    return;
+  }
+  if (sheetIntensity == nullptr)
+  {
+    std::replace(mask, mask + count, uint8_t{ 2 }, uint8_t{ 0 });
+    return;
+  }
+  // The zone within two voxels of each kind of material (a blurred sheet's rim reaches
+  // about that far).
+  auto within = [sheetMask](uint8_t value) {
+    using KernelType = BinaryBallStructuringElement<uint8_t, 3>;
+    KernelType kernel;
+    kernel.SetRadius(2);
+    kernel.CreateStructuringElement();
+    auto dilate = BinaryDilateImageFilter<SheetImageType, SheetImageType, KernelType>::New();
+    dilate->SetInput(sheetMask);
+    dilate->SetKernel(kernel);
+    dilate->SetForegroundValue(value);
+    dilate->SetBackgroundValue(0);
+    dilate->Update();
+    SheetImageType::Pointer zone = dilate->GetOutput();
+    zone->DisconnectPipeline();
+    return zone;
+  };
+  const SheetImageType::Pointer nearOther = within(2);
+  const SheetImageType::Pointer nearSheet = within(1);
+  const uint8_t *               other = nearOther->GetBufferPointer();
+  const uint8_t *               sheet = nearSheet->GetBufferPointer();
+  float *                       values = sheetIntensity->GetBufferPointer();
+  // Air: the voxels near no material at all; where the box holds too few, its median.
+  std::vector<float> air;
+  for (size_t i = 0; i < count; ++i)
+  {
+    if (other[i] != 2 && sheet[i] != 1)
+    {
+      air.push_back(values[i]);
+    }
+  }
+  if (air.size() < 64)
+  {
+    air.clear();
+    for (size_t i = 0; i < count; ++i)
+    {
+      if (mask[i] == 0)
+      {
+        air.push_back(values[i]);
+      }
+    }
+    if (air.empty())
+    {
+      air.push_back(*std::min_element(values, values + count));
+    }
+    std::nth_element(air.begin(), air.begin() + air.size() / 2, air.end());
+    air = { air[air.size() / 2] };
+  }
+  std::minstd_rand                      draw(20040601);
+  std::uniform_int_distribution<size_t> pick(0, air.size() - 1);
+  for (size_t i = 0; i < count; ++i)
+  {
+    if (mask[i] == 2 || (mask[i] == 0 && other[i] == 2 && sheet[i] != 1))
+    {
+      values[i] = air[pick(draw)];
+    }
+  }
+  std::replace(mask, mask + count, uint8_t{ 2 }, uint8_t{ 0 });
 }
 
 void

@@ -650,10 +650,13 @@ TraceRoll(const SheetVolumeView &             volume,
   // A spiral moves outwards by about a turn spacing per turn; a curve circling the centre
   // (a flat or folded sheet through it) does not. Noise adds crossings no trace explains: a
   // trace of two turns or more that grows by the turn spacing every turn is a spiral with
-  // fewer of them explained.
+  // fewer of them explained. A roll's turns wind around its axis at a distance; a flat
+  // sheet whose centroid line lies in it gives a trace that hugs the centre, within about
+  // the sheet's thickness, and may seem to turn and grow around it.
   const double medianGrowth = tracer.MedianGrowth(seedTrace);
   const bool   growsByPitch = tracer.GrowsByPitch(medianGrowth);
-  result.Rolled = turns >= 1.0 && medianGrowth >= std::max(settings.Voxel, 0.5 * tracer.Width()) &&
+  const bool   aroundAxis = Median(seedTrace.Rho) >= 1.2 * std::max(settings.Voxel, tracer.Width());
+  result.Rolled = turns >= 1.0 && aroundAxis && medianGrowth >= std::max(settings.Voxel, 0.5 * tracer.Width()) &&
                   (result.Explained >= 0.6 || (turns >= 2.0 && growsByPitch && result.Explained >= 0.4));
   progress(0.1);
 
