@@ -34,7 +34,9 @@ namespace itk {
  * pixels (non-finite pixels, e.g. NaN off an unwrapped sheet, take the median of the finite
  * ones, the background where ink covers a minority), inverts it when
  * InkIsBright (CT ink is denser, hence brighter, than the sheet) so that the text is dark
- * on white, enlarges it by UpscaleFactor (linear interpolation), pads a white border of
+ * on white, enlarges it by UpscaleFactor (linear interpolation; less when the enlarged
+ * image would exceed tesseract's largest side, 32767 pixels with the border: a long roll's
+ * texture is scaled to fit, GetAppliedScale()), pads a white border of
  * 16 pixels, writes a temporary 8-bit PNG and runs
  * `tesseract PNG stdout --psm PageSegmentationMode -l Language`.
  * Pixel spacing is ignored: image column = x to the right, row = y downwards.
@@ -96,6 +98,12 @@ public:
   /** CER of the last Compute() (0 when no truth was given). */
   itkGetConstMacro(CharacterErrorRate, double);
   itkGetConstMacro(EditDistance, SizeValueType);
+  /** The scale of the image tesseract read in the last Compute(): UpscaleFactor, or less
+   * for an image too long for tesseract. */
+  itkGetConstMacro(AppliedScale, double);
+
+  /** The longest side, in pixels, of an image tesseract reads. */
+  static constexpr SizeValueType TesseractLargestSide = 32767;
 
   /** True when the tesseract executable can be found. */
   bool
@@ -126,6 +134,7 @@ private:
   std::string             m_TruthText;
   bool                    m_InkIsBright{ true };
   double                  m_UpscaleFactor{ 2.0 };
+  double                  m_AppliedScale{ 0.0 };
   int                     m_PageSegmentationMode{ 6 };
   std::string             m_Language{ "eng" };
   std::string             m_TesseractExecutable{ "tesseract" };

@@ -212,15 +212,20 @@ TextLegibility::Compute()
   window->SetOutputMinimum(m_InkIsBright ? 255.0f : 0.0f);
   window->SetOutputMaximum(m_InkIsBright ? 0.0f : 255.0f);
 
-  // Resample on the pixel grid (spacing and origin do not matter to OCR).
+  // Resample on the pixel grid (spacing and origin do not matter to OCR), within the
+  // largest image tesseract reads.
+  constexpr SizeValueType    border = 16;
   const auto                 size = region.GetSize();
+  const double               longest = static_cast<double>(std::max(size[0], size[1]));
+  m_AppliedScale = std::min(m_UpscaleFactor, static_cast<double>(TesseractLargestSide - 2 * border) / longest);
   ImageType::SizeType        upSize;
   ImageType::SpacingType     upSpacing;
   ImageType::PointType       upOrigin;
   const ImageType::PointType inputOrigin = m_Image->GetOrigin();
   for (unsigned d = 0; d < 2; ++d)
   {
-    upSize[d] = std::max<SizeValueType>(1, static_cast<SizeValueType>(std::lround(size[d] * m_UpscaleFactor)));
+    upSize[d] = std::clamp<SizeValueType>(
+      static_cast<SizeValueType>(std::floor(size[d] * m_AppliedScale + 0.5)), 1, TesseractLargestSide - 2 * border);
     upSpacing[d] = m_Image->GetSpacing()[d] * size[d] / upSize[d];
     upOrigin[d] = inputOrigin[d] - 0.5 * m_Image->GetSpacing()[d] + 0.5 * upSpacing[d];
   }
@@ -233,10 +238,10 @@ TextLegibility::Compute()
   resample->SetDefaultPixelValue(255);
   auto pad = ConstantPadImageFilter<OutputImageType, OutputImageType>::New();
   pad->SetInput(resample->GetOutput());
-  OutputImageType::SizeType border;
-  border.Fill(16);
-  pad->SetPadLowerBound(border);
-  pad->SetPadUpperBound(border);
+  OutputImageType::SizeType padding;
+  padding.Fill(border);
+  pad->SetPadLowerBound(padding);
+  pad->SetPadUpperBound(padding);
   pad->SetConstant(255);
 
   TemporaryFile png;
@@ -294,6 +299,7 @@ TextLegibility::PrintSelf(std::ostream & os, Indent indent) const
   os << indent << "TruthText: " << m_TruthText << std::endl;
   os << indent << "InkIsBright: " << m_InkIsBright << std::endl;
   os << indent << "UpscaleFactor: " << m_UpscaleFactor << std::endl;
+  os << indent << "AppliedScale: " << m_AppliedScale << std::endl;
   os << indent << "PageSegmentationMode: " << m_PageSegmentationMode << std::endl;
   os << indent << "Language: " << m_Language << std::endl;
   os << indent << "TesseractExecutable: " << m_TesseractExecutable << std::endl;

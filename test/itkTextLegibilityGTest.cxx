@@ -149,6 +149,48 @@ TEST(TextLegibility, NaNPixelsAreBackground)
   EXPECT_THROW(legibility->Compute(), itk::ExceptionObject);
 }
 
+// A long roll's texture is tens of thousands of pixels long, longer than tesseract reads
+// once enlarged: it is enlarged less, to fit, and still read.
+TEST(TextLegibility, ImageTooLongForTesseractIsScaledToFit)
+{
+  auto legibility = Legibility::New();
+  if (!legibility->IsTesseractAvailable())
+  {
+    GTEST_SKIP() << "tesseract is not installed";
+  }
+  auto              source = itk::SheetPhantomSource::New();
+  const std::string text = "THE QUICK BROWN FOX";
+  const auto *      ink = RenderInk(source, text);
+  using InkType = itk::SheetPhantomGeometry::InkImageType;
+  const auto        inner = ink->GetLargestPossibleRegion().GetSize();
+  const long        length = 20000;
+  ASSERT_LT(static_cast<long>(inner[0]), length);
+  auto              strip = InkType::New();
+  InkType::SizeType size = { { static_cast<itk::SizeValueType>(length), inner[1] } };
+  strip->SetRegions(size);
+  strip->Allocate();
+  strip->FillBuffer(0.0f);
+  for (long y = 0; y < static_cast<long>(inner[1]); ++y)
+  {
+    for (long x = 0; x < static_cast<long>(inner[0]); ++x)
+    {
+      strip->SetPixel({ { x + length / 2, y } }, ink->GetPixel({ { x, y } }));
+    }
+  }
+  legibility->SetImage(strip);
+  legibility->SetTruthText(text);
+  legibility->Compute();
+  EXPECT_EQ(Legibility::NormalizeText(legibility->GetRecognizedText()), text);
+  EXPECT_NEAR(legibility->GetAppliedScale(),
+              static_cast<double>(Legibility::TesseractLargestSide - 32) / static_cast<double>(length),
+              1e-9);
+
+  // An image that fits keeps the upscale factor.
+  legibility->SetImage(ink);
+  legibility->Compute();
+  EXPECT_EQ(legibility->GetAppliedScale(), legibility->GetUpscaleFactor());
+}
+
 TEST(TextLegibility, ReportsMissingTesseractAndMissingImage)
 {
   auto legibility = Legibility::New();

@@ -27,7 +27,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <regex>
 
 #include <sys/resource.h>
 #if defined(__GLIBC__)
@@ -37,23 +36,6 @@
 namespace {
 // ITK's exception text spans several lines (location, file, description): keep the
 // description, which says what went wrong.
-std::string
-OneLine(std::string text)
-{
-  for (char & c : text)
-  {
-    if (c == '\n' || c == '\r')
-    {
-      c = ' ';
-    }
-  }
-  // itkExceptionMacro prefixes "ITK ERROR: Class(0x...): " and itkGenericExceptionMacro
-  // "ITK ERROR: ", also when the text is quoted inside another message: neither tells a
-  // user anything.
-  static const std::regex prefix("ITK ERROR: ([^( ]*\\(0x[0-9a-fA-F]+\\): )?");
-  return std::regex_replace(text, prefix, "");
-}
-
 // An allocation that failed cannot say how much it wanted: say what was being done and
 // what limits the memory.
 std::string
@@ -112,7 +94,7 @@ main(int argc, char * argv[])
   catch (const CLI::ParseError & e)
   {
     // One line like every other error (CLI11's own report adds a second).
-    std::cerr << "virtual-unwrap: error: " << OneLine(e.what()) << " (see virtual-unwrap --help)" << std::endl;
+    std::cerr << "virtual-unwrap: error: " << vu::OneLine(e.what()) << " (see virtual-unwrap --help)" << std::endl;
     return 2;
   }
   catch (const itk::MemoryAllocationError &)
@@ -127,12 +109,12 @@ main(int argc, char * argv[])
   }
   catch (const itk::ExceptionObject & e)
   {
-    std::cerr << "virtual-unwrap: error: " << OneLine(e.GetDescription()) << std::endl;
+    std::cerr << "virtual-unwrap: error: " << vu::OneLine(e.GetDescription()) << std::endl;
     return 1;
   }
   catch (const std::exception & e)
   {
-    std::cerr << "virtual-unwrap: error: " << OneLine(e.what()) << std::endl;
+    std::cerr << "virtual-unwrap: error: " << vu::OneLine(e.what()) << std::endl;
     return 1;
   }
   return 0;

@@ -19,6 +19,7 @@
 // readable image: read, segment, mesh the sheet's mid-surface, unroll and flatten it by
 // mass-spring simulation, render the layered texture, report.
 #include "vuCommands.h"
+#include "vuOutput.h"
 #include "vuProgress.h"
 #include "vuReaderOptions.h"
 #include "vuSheetMeshIO.h"
@@ -701,17 +702,29 @@ LegibilityJson(const GroundTruth & truth, const TextureType * texture, const Tex
   fidelity->SetReference(truth.Ink);
   fidelity->SetTexture(texture);
   fidelity->Compute();
+  itk::Object::SetGlobalWarningDisplay(warningsWereOn);
+  nlohmann::json result = { { "texture_ncc", fidelity->GetNormalizedCrossCorrelation() },
+                            { "mirrored", fidelity->GetMirrored() },
+                            { "rotation_degrees", fidelity->GetRotationDegrees() },
+                            { "truth_text", truth.Text } };
+  // OCR that fails (tesseract missing or refusing the image) is reported, not fatal: the
+  // sheet's results are written all the same.
   auto legibility = itk::TextLegibility::New();
   legibility->SetImage(display);
   legibility->SetTruthText(truth.Text);
-  legibility->Compute();
-  itk::Object::SetGlobalWarningDisplay(warningsWereOn);
-  return { { "texture_ncc", fidelity->GetNormalizedCrossCorrelation() },
-           { "mirrored", fidelity->GetMirrored() },
-           { "rotation_degrees", fidelity->GetRotationDegrees() },
-           { "character_error_rate", legibility->GetCharacterErrorRate() },
-           { "recognized_text", legibility->GetRecognizedText() },
-           { "truth_text", truth.Text } };
+  try
+  {
+    legibility->Compute();
+    result["character_error_rate"] = legibility->GetCharacterErrorRate();
+    result["recognized_text"] = legibility->GetRecognizedText();
+    result["ocr_scale"] = legibility->GetAppliedScale();
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    result["character_error_rate"] = nullptr;
+    result["ocr_error"] = OneLine(e.GetDescription());
+  }
+  return result;
 }
 
 using SurfaceFilterType = itk::SheetMidSurfaceMeshFilter<MaskType, MeshType>;
@@ -877,6 +890,10 @@ UnwrapSheet(const SheetContext & context,
   {
     clock.Start("score", which + "comparing with the ground truth");
     report["legibility"] = LegibilityJson(context.Truth, results.Texture, results.Display);
+    if (report["legibility"].contains("ocr_error"))
+    {
+      report["warnings"].push_back("score: no OCR: " + report["legibility"]["ocr_error"].get<std::string>());
+    }
     clock.End("score");
   }
   return report;

@@ -28,6 +28,7 @@
 #include <cstring>
 #include <fstream>
 #include <iostream>
+#include <regex>
 
 #include <dirent.h>
 #include <fcntl.h>
@@ -39,6 +40,23 @@
 namespace fs = std::filesystem;
 
 namespace vu {
+std::string
+OneLine(std::string text)
+{
+  for (char & c : text)
+  {
+    if (c == '\n' || c == '\r')
+    {
+      c = ' ';
+    }
+  }
+  // itkExceptionMacro prefixes "ITK ERROR: Class(0x...): " and itkGenericExceptionMacro
+  // "ITK ERROR: ", also when the text is quoted inside another message: neither tells a
+  // user anything.
+  static const std::regex prefix("ITK ERROR: ([^( ]*\\(0x[0-9a-fA-F]+\\): )?");
+  return std::regex_replace(text, prefix, "");
+}
+
 void
 WriteTextFileAtomically(const std::string & path, const std::string & text)
 {

@@ -26,6 +26,11 @@
 #include <vector>
 
 namespace vu {
+/** An error's text on one line, without the "ITK ERROR: Class(0x...): " prefix of ITK's
+ * exception macros (also where it is quoted inside another message). */
+std::string
+OneLine(std::string text);
+
 /** Writes text to path atomically: to a temporary name beside it, then renamed, so a
  * failure never leaves a half-written file. */
 void

@@ -139,8 +139,15 @@ Progress::Finish(const std::string & outputDirectory, const nlohmann::json & rep
     return;
   }
   auto legibility = [](const nlohmann::json & l) {
-    std::cout << "texture NCC " << l["texture_ncc"].get<double>() << ", OCR character error rate "
-              << l["character_error_rate"].get<double>() << std::endl;
+    std::cout << "texture NCC " << l["texture_ncc"].get<double>() << ", ";
+    if (l["character_error_rate"].is_number())
+    {
+      std::cout << "OCR character error rate " << l["character_error_rate"].get<double>() << std::endl;
+    }
+    else
+    {
+      std::cout << "no OCR (" << l.value("ocr_error", std::string("not run")) << ")" << std::endl;
+    }
   };
   const bool folders = report.contains("sheets") &&
                        std::any_of(report["sheets"].begin(), report["sheets"].end(), [](const nlohmann::json & sheet) {
