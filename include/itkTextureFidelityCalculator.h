@@ -60,7 +60,9 @@ namespace itk {
  * - AllowMirror (true): also try the mirrored texture;
  * - AllowQuarterTurns (true): start from 0, 90, 180 and 270 degrees, else from 0 only;
  * - CoarseSize (64; 16 .. 4096): pixels along the reference's longer side at the coarse
- *   level (the shrink factor follows from it);
+ *   level (the shrink factor follows from it), but the shorter side keeps at least 8
+ *   pixels there (a long roll's texture is a strip a hundred times longer than wide,
+ *   which would otherwise shrink to a single row);
  * - NumberOfIterations (100; >= 1): optimizer iterations per level;
  * - BorderWidth (0; >= 0, physical units): reference pixels whose centre lies less than
  *   this far inside the edge of the reference's valid region (taken half a pixel beyond

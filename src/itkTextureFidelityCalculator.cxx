@@ -347,11 +347,13 @@ TextureFidelityCalculator::Compute()
   }
   std::vector<PreparedImage> textures{ Prepare(m_Texture, m_TextureMask, "texture") };
   const auto                 referenceSize = reference.Image->GetLargestPossibleRegion().GetSize();
-  // The coarse level has at most CoarseSize pixels along the reference's longer side.
-  const auto coarseShrink =
-    std::max(1u,
-             static_cast<unsigned int>(
-               std::ceil(static_cast<double>(std::max(referenceSize[0], referenceSize[1])) / m_CoarseSize)));
+  // The coarse level has at most CoarseSize pixels along the reference's longer side and
+  // at least 8 along its shorter side.
+  const double longer = static_cast<double>(std::max(referenceSize[0], referenceSize[1]));
+  const double shorter = static_cast<double>(std::min(referenceSize[0], referenceSize[1]));
+  const auto   coarseShrink = std::max(1u,
+                                     static_cast<unsigned int>(std::min(std::ceil(longer / m_CoarseSize),
+                                                                        std::floor(shorter / 8.0))));
   if (m_AllowMirror)
   {
     MaskType::ConstPointer mirroredMask;
