@@ -34,6 +34,29 @@ RenderInk(itk::SheetPhantomSource * source, const std::string & text)
   source->UpdateOutputInformation();
   return source->GetGeometry().GetInkImage();
 }
+
+// The ink image placed at `offset` on an image of `size` filled with `fill`.
+itk::SheetPhantomGeometry::InkImageType::Pointer
+Placed(const itk::SheetPhantomGeometry::InkImageType * ink,
+       const itk::SheetPhantomGeometry::InkImageType::SizeType & size,
+       const long                                                 offset[2],
+       float                                                      fill)
+{
+  using InkType = itk::SheetPhantomGeometry::InkImageType;
+  const auto inner = ink->GetLargestPossibleRegion().GetSize();
+  auto       placed = InkType::New();
+  placed->SetRegions(size);
+  placed->Allocate();
+  placed->FillBuffer(fill);
+  for (long y = 0; y < static_cast<long>(inner[1]); ++y)
+  {
+    for (long x = 0; x < static_cast<long>(inner[0]); ++x)
+    {
+      placed->SetPixel({ { x + offset[0], y + offset[1] } }, ink->GetPixel({ { x, y } }));
+    }
+  }
+  return placed;
+}
 } // namespace
 
 TEST(TextLegibility, BasicObjectMethods)
@@ -126,19 +149,9 @@ TEST(TextLegibility, NaNPixelsAreBackground)
   const auto *      ink = RenderInk(source, text);
   using InkType = itk::SheetPhantomGeometry::InkImageType;
   const auto        inner = ink->GetLargestPossibleRegion().GetSize();
-  const long        frame = 40;
-  auto              framed = InkType::New();
-  InkType::SizeType size = { { inner[0] + 2 * frame, inner[1] + 2 * frame } };
-  framed->SetRegions(size);
-  framed->Allocate();
-  framed->FillBuffer(std::numeric_limits<float>::quiet_NaN());
-  for (long y = 0; y < static_cast<long>(inner[1]); ++y)
-  {
-    for (long x = 0; x < static_cast<long>(inner[0]); ++x)
-    {
-      framed->SetPixel({ { x + frame, y + frame } }, ink->GetPixel({ { x, y } }));
-    }
-  }
+  const long        frame[2] = { 40, 40 };
+  InkType::SizeType size = { { inner[0] + 2 * frame[0], inner[1] + 2 * frame[1] } };
+  auto              framed = Placed(ink, size, frame, std::numeric_limits<float>::quiet_NaN());
   legibility->SetImage(framed);
   legibility->SetTruthText(text);
   legibility->Compute();
@@ -165,19 +178,9 @@ TEST(TextLegibility, ImageTooLongForTesseractIsScaledToFit)
   const auto        inner = ink->GetLargestPossibleRegion().GetSize();
   const long        length = 20000;
   ASSERT_LT(static_cast<long>(inner[0]), length);
-  auto              strip = InkType::New();
   InkType::SizeType size = { { static_cast<itk::SizeValueType>(length), inner[1] } };
-  strip->SetRegions(size);
-  strip->Allocate();
-  strip->FillBuffer(0.0f);
-  for (long y = 0; y < static_cast<long>(inner[1]); ++y)
-  {
-    for (long x = 0; x < static_cast<long>(inner[0]); ++x)
-    {
-      strip->SetPixel({ { x + length / 2, y } }, ink->GetPixel({ { x, y } }));
-    }
-  }
-  legibility->SetImage(strip);
+  const long        middle[2] = { length / 2, 0 };
+  legibility->SetImage(Placed(ink, size, middle, 0.0f));
   legibility->SetTruthText(text);
   legibility->Compute();
   EXPECT_EQ(Legibility::NormalizeText(legibility->GetRecognizedText()), text);
