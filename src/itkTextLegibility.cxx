@@ -214,9 +214,9 @@ TextLegibility::Compute()
 
   // Resample on the pixel grid (spacing and origin do not matter to OCR), within the
   // largest image tesseract reads.
-  constexpr SizeValueType    border = 16;
-  const auto                 size = region.GetSize();
-  const double               longest = static_cast<double>(std::max(size[0], size[1]));
+  constexpr SizeValueType border = 16;
+  const auto              size = region.GetSize();
+  const double            longest = static_cast<double>(std::max(size[0], size[1]));
   m_AppliedScale = std::min(m_UpscaleFactor, static_cast<double>(TesseractLargestSide - 2 * border) / longest);
   ImageType::SizeType        upSize;
   ImageType::SpacingType     upSpacing;

@@ -351,9 +351,8 @@ TextureFidelityCalculator::Compute()
   // at least 8 along its shorter side.
   const double longer = static_cast<double>(std::max(referenceSize[0], referenceSize[1]));
   const double shorter = static_cast<double>(std::min(referenceSize[0], referenceSize[1]));
-  const auto   coarseShrink = std::max(1u,
-                                     static_cast<unsigned int>(std::min(std::ceil(longer / m_CoarseSize),
-                                                                        std::floor(shorter / 8.0))));
+  const auto   coarseShrink =
+    std::max(1u, static_cast<unsigned int>(std::min(std::ceil(longer / m_CoarseSize), std::floor(shorter / 8.0))));
   if (m_AllowMirror)
   {
     MaskType::ConstPointer mirroredMask;

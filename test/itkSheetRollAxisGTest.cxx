@@ -32,9 +32,9 @@ template <typename TImage>
 typename TImage::Pointer
 MakeImage()
 {
-  auto                         image = TImage::New();
-  typename TImage::RegionType  region;
-  typename TImage::SizeType    size = { { Nx, Ny, Nz } };
+  auto                        image = TImage::New();
+  typename TImage::RegionType region;
+  typename TImage::SizeType   size = { { Nx, Ny, Nz } };
   region.SetSize(size);
   image->SetRegions(region);
   image->Allocate();
@@ -86,10 +86,10 @@ struct Scene
 
 TEST(SheetRollAxis, OtherSheetsAreHiddenInTheBoxsAir)
 {
-  Scene              scene;
-  const Scene        original;
-  const float *      before = original.Values->GetBufferPointer();
-  const float *      after = scene.Values->GetBufferPointer();
+  Scene         scene;
+  const Scene   original;
+  const float * before = original.Values->GetBufferPointer();
+  const float * after = scene.Values->GetBufferPointer();
   itk::SheetRollAxis::HideOtherSheets(scene.Mask, scene.Values);
 
   double sum = 0.0, squares = 0.0;

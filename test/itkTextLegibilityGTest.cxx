@@ -37,10 +37,10 @@ RenderInk(itk::SheetPhantomSource * source, const std::string & text)
 
 // The ink image placed at `offset` on an image of `size` filled with `fill`.
 itk::SheetPhantomGeometry::InkImageType::Pointer
-Placed(const itk::SheetPhantomGeometry::InkImageType * ink,
+Placed(const itk::SheetPhantomGeometry::InkImageType *           ink,
        const itk::SheetPhantomGeometry::InkImageType::SizeType & size,
-       const long                                                 offset[2],
-       float                                                      fill)
+       const long                                                offset[2],
+       float                                                     fill)
 {
   using InkType = itk::SheetPhantomGeometry::InkImageType;
   const auto inner = ink->GetLargestPossibleRegion().GetSize();
@@ -175,8 +175,8 @@ TEST(TextLegibility, ImageTooLongForTesseractIsScaledToFit)
   const std::string text = "THE QUICK BROWN FOX";
   const auto *      ink = RenderInk(source, text);
   using InkType = itk::SheetPhantomGeometry::InkImageType;
-  const auto        inner = ink->GetLargestPossibleRegion().GetSize();
-  const long        length = 20000;
+  const auto inner = ink->GetLargestPossibleRegion().GetSize();
+  const long length = 20000;
   ASSERT_LT(static_cast<long>(inner[0]), length);
   InkType::SizeType size = { { static_cast<itk::SizeValueType>(length), inner[1] } };
   const long        middle[2] = { length / 2, 0 };
