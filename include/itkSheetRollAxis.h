@@ -31,10 +31,12 @@ namespace itk {
  * image and mesh types (compiled once, in the library).
  *
  * Estimate(): the direction of least gradient energy over the sheet (the structure
- * tensor's smallest eigenvector, from Gaussian derivatives at one voxel), where the two
- * larger eigenvalues are comparable (a roll spreads its normals across its axis) and the
- * axis lies within 45 degrees of the slice normal; otherwise EstimateFromCentroids(), the
- * least-squares line through the centroids of the middle 60 % of the slices.
+ * tensor's smallest eigenvector, from Gaussian derivatives at one voxel, less the noise's
+ * own tensor measured in the air three voxels or more from the sheet), where the middle
+ * eigenvalue stands well above the smallest, or above it and comparable with the largest
+ * (a roll spreads its normals across its axis), and the axis lies within 45 degrees of the
+ * slice normal; otherwise EstimateFromCentroids(),
+ * the least-squares line through the centroids of the middle 60 % of the slices.
  * Align(): when the axis is tilted from the slice normal by more than `tiltTolerance`
  * degrees, or the in-plane voxels are not square, resamples the box onto a grid whose third
  * axis is the roll axis and whose in-plane voxels are square. Returns true when the axis

@@ -82,57 +82,107 @@ SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageTy
   const auto      size = sheetMask->GetBufferedRegion().GetSize();
   const auto &    direction = sheetMask->GetDirection();
   // Slice by slice in parallel, then summed in slice order (the same sum on any number of
-  // threads).
+  // threads). The air well away from the sheet (no material within NoiseProbe voxels along
+  // any axis) measures the noise's own tensor per voxel, which is taken off the sheet's
+  // sum for the axis's direction: noise adds gradient energy in every direction, and
+  // projection noise more within the slices than across them, which tips the axis towards
+  // the slice normal.
+  constexpr long                     NoiseProbe = 3;
   std::vector<std::array<double, 9>> sliceTensors(size[2], std::array<double, 9>{});
-  ForEachImageRow(sheetMask, sheetMask->GetBufferedRegion(), [&](SizeValueType k, SizeValueType, const uint8_t * row) {
-    std::array<double, 9> & sum = sliceTensors[k];
-    const auto *            gradientRow = gradients + (row - mask);
-    for (size_t i = 0; i < size[0]; ++i)
+  std::vector<std::array<double, 9>> airTensors(size[2], std::array<double, 9>{});
+  std::vector<double>                sheetVoxels(size[2], 0.0), airVoxels(size[2], 0.0);
+  const long nx = static_cast<long>(size[0]), ny = static_cast<long>(size[1]), nz = static_cast<long>(size[2]);
+  auto       material = [&](long i, long j, long k) {
+    return i >= 0 && j >= 0 && k >= 0 && i < nx && j < ny && k < nz && mask[(k * ny + j) * nx + i] != 0;
+  };
+  auto farFromSheet = [&](long i, long j, long k) {
+    for (long d = 1; d <= NoiseProbe; ++d)
     {
-      if (row[i] == 0)
+      if (material(i - d, j, k) || material(i + d, j, k) || material(i, j - d, k) || material(i, j + d, k) ||
+          material(i, j, k - d) || material(i, j, k + d))
       {
-        continue;
-      }
-      const auto & physical = gradientRow[i];
-      for (unsigned r = 0; r < 3; ++r)
-      {
-        for (unsigned c = 0; c < 3; ++c)
-        {
-          sum[3 * r + c] += static_cast<double>(physical[r]) * static_cast<double>(physical[c]);
-        }
+        return false;
       }
     }
-  });
-  vnl_matrix<double> tensor(3, 3, 0.0);
-  for (const auto & sum : sliceTensors)
+    return true;
+  };
+  ForEachImageRow(
+    sheetMask, sheetMask->GetBufferedRegion(), [&](SizeValueType k, SizeValueType j, const uint8_t * row) {
+      const auto * gradientRow = gradients + (row - mask);
+      for (size_t i = 0; i < size[0]; ++i)
+      {
+        // The air's mean from every other voxel of every other row: a sample is enough.
+        const bool onSheet = row[i] != 0;
+        if (!onSheet && (sheetIntensity == nullptr || i % 2 != 0 || j % 2 != 0 ||
+                         !farFromSheet(static_cast<long>(i), static_cast<long>(j), static_cast<long>(k))))
+        {
+          continue;
+        }
+        std::array<double, 9> & sum = onSheet ? sliceTensors[k] : airTensors[k];
+        (onSheet ? sheetVoxels : airVoxels)[k] += 1.0;
+        const auto & physical = gradientRow[i];
+        for (unsigned r = 0; r < 3; ++r)
+        {
+          for (unsigned c = 0; c < 3; ++c)
+          {
+            sum[3 * r + c] += static_cast<double>(physical[r]) * static_cast<double>(physical[c]);
+          }
+        }
+      }
+    });
+  vnl_matrix<double> tensor(3, 3, 0.0), air(3, 3, 0.0);
+  double             sheetCount = 0.0, airCount = 0.0;
+  for (size_t k = 0; k < size[2]; ++k)
   {
+    sheetCount += sheetVoxels[k];
+    airCount += airVoxels[k];
     for (unsigned r = 0; r < 3; ++r)
     {
       for (unsigned c = 0; c < 3; ++c)
       {
-        tensor(r, c) += sum[3 * r + c];
+        tensor(r, c) += sliceTensors[k][3 * r + c];
+        air(r, c) += airTensors[k][3 * r + c];
       }
     }
   }
+  // Whether the sheet is a roll is decided on the whole tensor, noise and all (the same
+  // test for a clean and a noisy scan of one object); the axis's direction is taken with
+  // the noise's share off, given enough air for a mean (a box the sheet fills leaves
+  // little).
+  constexpr double                        LeastAirVoxels = 1000.0;
   const vnl_symmetric_eigensystem<double> eigen(tensor);
-  // Eigenvalues ascending. A roll spreads its normals evenly across the axis: the two
-  // large eigenvalues are comparable and far above the axis's.
-  constexpr double rolledEigenvalueRatio = 2.5;
-  constexpr double largestTilt = 45.0;
-  if (eigen.get_eigenvalue(1) > rolledEigenvalueRatio * std::max(eigen.get_eigenvalue(0), 0.0) &&
-      eigen.get_eigenvalue(1) > 0.0)
+  if (airCount >= LeastAirVoxels)
   {
-    AxisType axis;
-    for (unsigned r = 0; r < 3; ++r)
-    {
-      axis[r] = eigen.get_eigenvector(0)[r];
-    }
-    const double cosine = axis[0] * direction[0][2] + axis[1] * direction[1][2] + axis[2] * direction[2][2];
-    if (std::abs(cosine) >= std::cos(largestTilt * Math::pi / 180.0))
-    {
-      fromTensor = true;
-      return cosine < 0.0 ? AxisType(-axis) : axis;
-    }
+    tensor -= (sheetCount / airCount) * air;
+  }
+  const vnl_symmetric_eigensystem<double> withoutNoise(tensor);
+  // Eigenvalues ascending. A roll spreads its normals across the axis: the two large
+  // eigenvalues are far above the axis's, or (an elliptic roll whose radius changes along
+  // the axis, whose normals tilt towards it) still clearly above it and comparable with
+  // each other, as a flat or gently curved sheet's are not.
+  constexpr double rolledEigenvalueRatio = 2.5;
+  constexpr double tiltedEigenvalueRatio = 1.5;
+  constexpr double comparableEigenvalues = 0.25;
+  constexpr double largestTilt = 45.0;
+  AxisType         tensorAxis, sliceNormal;
+  for (unsigned r = 0; r < 3; ++r)
+  {
+    tensorAxis[r] = withoutNoise.get_eigenvector(0)[r];
+    sliceNormal[r] = direction[r][2];
+  }
+  const double cosine = tensorAxis * sliceNormal;
+  if (cosine < 0.0)
+  {
+    tensorAxis = -tensorAxis;
+  }
+  const bool   tensorInReach = std::abs(cosine) >= std::cos(largestTilt * Math::pi / 180.0);
+  const double smallest = std::max(eigen.get_eigenvalue(0), 0.0), middle = eigen.get_eigenvalue(1);
+  if (tensorInReach && middle > 0.0 &&
+      (middle > rolledEigenvalueRatio * smallest ||
+       (middle > tiltedEigenvalueRatio * smallest && middle > comparableEigenvalues * eigen.get_eigenvalue(2))))
+  {
+    fromTensor = true;
+    return tensorAxis;
   }
   fromTensor = false;
   return EstimateFromCentroids(sheetMask);
