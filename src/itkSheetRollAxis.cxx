@@ -87,10 +87,10 @@ SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageTy
   // sum for the axis's direction: noise adds gradient energy in every direction, and
   // projection noise more within the slices than across them, which tips the axis towards
   // the slice normal.
-  constexpr long                     NoiseProbe = 3;
-  std::vector<std::array<double, 9>> sliceTensors(size[2], std::array<double, 9>{});
-  std::vector<std::array<double, 9>> airTensors(size[2], std::array<double, 9>{});
-  std::vector<double>                sheetVoxels(size[2], 0.0), airVoxels(size[2], 0.0);
+  constexpr long NoiseProbe = 3;
+  // Per slice: the sheet's and the air's tensor sums (entries 0-8) and voxel counts (9).
+  std::vector<std::array<double, 10>> sheetSums(size[2], std::array<double, 10>{});
+  std::vector<std::array<double, 10>> airSums(size[2], std::array<double, 10>{});
   const long nx = static_cast<long>(size[0]), ny = static_cast<long>(size[1]), nz = static_cast<long>(size[2]);
   auto       material = [&](long i, long j, long k) {
     return i >= 0 && j >= 0 && k >= 0 && i < nx && j < ny && k < nz && mask[(k * ny + j) * nx + i] != 0;
@@ -118,9 +118,8 @@ SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageTy
         {
           continue;
         }
-        std::array<double, 9> & sum = onSheet ? sliceTensors[k] : airTensors[k];
-        (onSheet ? sheetVoxels : airVoxels)[k] += 1.0;
-        const auto & physical = gradientRow[i];
+        std::array<double, 10> & sum = onSheet ? sheetSums[k] : airSums[k];
+        const auto &             physical = gradientRow[i];
         for (unsigned r = 0; r < 3; ++r)
         {
           for (unsigned c = 0; c < 3; ++c)
@@ -128,20 +127,21 @@ SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageTy
             sum[3 * r + c] += static_cast<double>(physical[r]) * static_cast<double>(physical[c]);
           }
         }
+        sum[9] += 1.0;
       }
     });
   vnl_matrix<double> tensor(3, 3, 0.0), air(3, 3, 0.0);
   double             sheetCount = 0.0, airCount = 0.0;
   for (size_t k = 0; k < size[2]; ++k)
   {
-    sheetCount += sheetVoxels[k];
-    airCount += airVoxels[k];
+    sheetCount += sheetSums[k][9];
+    airCount += airSums[k][9];
     for (unsigned r = 0; r < 3; ++r)
     {
       for (unsigned c = 0; c < 3; ++c)
       {
-        tensor(r, c) += sliceTensors[k][3 * r + c];
-        air(r, c) += airTensors[k][3 * r + c];
+        tensor(r, c) += sheetSums[k][3 * r + c];
+        air(r, c) += airSums[k][3 * r + c];
       }
     }
   }
@@ -151,11 +151,8 @@ SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageTy
   // little).
   constexpr double                        LeastAirVoxels = 1000.0;
   const vnl_symmetric_eigensystem<double> eigen(tensor);
-  if (airCount >= LeastAirVoxels)
-  {
-    tensor -= (sheetCount / airCount) * air;
-  }
-  const vnl_symmetric_eigensystem<double> withoutNoise(tensor);
+  const vnl_symmetric_eigensystem<double> withoutNoise(
+    airCount >= LeastAirVoxels ? tensor - (sheetCount / airCount) * air : tensor);
   // Eigenvalues ascending. A roll spreads its normals across the axis: the two large
   // eigenvalues are far above the axis's, or (an elliptic roll whose radius changes along
   // the axis, whose normals tilt towards it) still clearly above it and comparable with

@@ -31,11 +31,10 @@ constexpr long Nx = 40, Ny = 40, Nz = 8;
 
 template <typename TImage>
 typename TImage::Pointer
-MakeImage()
+MakeImage(const typename TImage::SizeType & size = { { Nx, Ny, Nz } })
 {
   auto                        image = TImage::New();
   typename TImage::RegionType region;
-  typename TImage::SizeType   size = { { Nx, Ny, Nz } };
   region.SetSize(size);
   image->SetRegions(region);
   image->Allocate();
@@ -175,14 +174,16 @@ struct ShortRoll
   itk::SheetRollAxis::AxisType Axis;
   double                       Noise = 0.0;
 
-  explicit ShortRoll(unsigned seed)
+  // `acrossSlices`: the noise smoothed over three slices along z, as projection noise is
+  // stronger within the slices than across them; its level then `noise`.
+  explicit ShortRoll(unsigned seed, bool acrossSlices = false, double noise = 0.0)
   {
     std::mt19937                           random(seed);
     std::uniform_real_distribution<double> uniform(0.0, 1.0);
     const double turns = 8.0 + 3.0 * uniform(random), pitch = 5.0, thickness = 2.5, inner = 8.0;
     const double width = 18.0 + 8.0 * uniform(random);
     const double tilt = (4.0 + 11.0 * uniform(random)) * M_PI / 180.0, about = 2.0 * M_PI * uniform(random);
-    Noise = 0.8 + 0.3 * uniform(random);
+    Noise = acrossSlices ? noise : 0.8 + 0.3 * uniform(random);
     const double outer = inner + turns * pitch + thickness;
     const long   n = static_cast<long>(2.0 * outer + 8.0),
                nz = static_cast<long>(width + 2.0 * outer * std::sin(tilt) + 8.0);
@@ -194,22 +195,27 @@ struct ShortRoll
     {
       Axis[r] = a[r];
     }
-    Mask = MaskImage::New();
-    Values = FloatImage::New();
-    MaskImage::RegionType region;
-    region.SetSize({ { static_cast<itk::SizeValueType>(n),
-                       static_cast<itk::SizeValueType>(n),
-                       static_cast<itk::SizeValueType>(nz) } });
-    for (auto image :
-         { static_cast<itk::ImageBase<3> *>(Mask.GetPointer()), static_cast<itk::ImageBase<3> *>(Values.GetPointer()) })
+    const MaskImage::SizeType size = {
+      { static_cast<itk::SizeValueType>(n), static_cast<itk::SizeValueType>(n), static_cast<itk::SizeValueType>(nz) }
+    };
+    Mask = MakeImage<MaskImage>(size);
+    Values = MakeImage<FloatImage>(size);
+    // White noise, or its mean over three slices scaled back to the level.
+    std::normal_distribution<double> white(0.0, Noise);
+    std::vector<double>              noiseAt(static_cast<size_t>(n * n * nz));
+    std::generate(noiseAt.begin(), noiseAt.end(), [&]() { return white(random); });
+    if (acrossSlices)
     {
-      image->SetRegions(region);
+      const std::vector<double> raw = noiseAt;
+      const auto                plane = static_cast<size_t>(n * n);
+      for (size_t q = 0; q < raw.size(); ++q)
+      {
+        const size_t below = q >= plane ? q - plane : q + plane, above = q + plane < raw.size() ? q + plane : q - plane;
+        noiseAt[q] = (raw[below] + raw[q] + raw[above]) / std::sqrt(3.0);
+      }
     }
-    Mask->Allocate();
-    Values->Allocate();
-    std::normal_distribution<double> noise(0.0, Noise);
-    const double                     c = 0.5 * static_cast<double>(n - 1), cz = 0.5 * static_cast<double>(nz - 1);
-    size_t                           index = 0;
+    const double c = 0.5 * static_cast<double>(n - 1), cz = 0.5 * static_cast<double>(nz - 1);
+    size_t       index = 0;
     for (long k = 0; k < nz; ++k)
     {
       for (long j = 0; j < n; ++j)
@@ -227,7 +233,7 @@ struct ShortRoll
           const double occupancy = std::clamp(0.5 * thickness - std::abs(d) + 0.5, 0.0, 1.0) *
                                    std::clamp(0.5 * width - std::abs(w) + 0.5, 0.0, 1.0);
           Mask->GetBufferPointer()[index] = occupancy >= 0.5 ? 1 : 0;
-          Values->GetBufferPointer()[index] = static_cast<float>(occupancy + noise(random));
+          Values->GetBufferPointer()[index] = static_cast<float>(occupancy + noiseAt[index]);
         }
       }
     }
@@ -252,4 +258,26 @@ TEST(SheetRollAxis, AShortRollInStrongNoiseHasItsAxisFromTheTensor)
     EXPECT_TRUE(fromTensor) << "seed " << first + draw;
     EXPECT_LT(angle, 2.0) << "seed " << first + draw << ", noise " << roll.Noise;
   }
+}
+
+// Noise stronger within the slices than across them (as projection noise is) adds gradient
+// energy across the axis more than along it and tips the tensor's axis towards the slice
+// normal; the noise's own tensor, measured in the air, is taken off. Rolls drawn at run time.
+TEST(SheetRollAxis, NoiseStrongerWithinTheSlicesDoesNotTipTheAxis)
+{
+  // The tilt found less the true tilt, averaged over six rolls: each roll's noise moves its
+  // axis a little either way; only the tipping is the same for all. Measured: 1.2 to 1.7
+  // degrees towards the slice normal with the whole tensor, 0.4 to 0.7 with the air's off.
+  const unsigned first = std::random_device{}();
+  const unsigned draws = 6;
+  double         meanError = 0.0;
+  for (unsigned draw = 0; draw < draws; ++draw)
+  {
+    const ShortRoll roll(first + draw, true, 0.6);
+    bool            fromTensor = false;
+    const auto      axis = itk::SheetRollAxis::Estimate(roll.Mask, roll.Values, fromTensor);
+    EXPECT_TRUE(fromTensor) << "seed " << first + draw;
+    meanError += (std::acos(std::abs(axis[2])) - std::acos(std::abs(roll.Axis[2]))) * 180.0 / M_PI / draws;
+  }
+  EXPECT_LT(std::abs(meanError), 0.9) << "seeds from " << first;
 }
