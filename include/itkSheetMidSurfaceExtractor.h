@@ -165,6 +165,15 @@ struct VirtualUnwrapping_EXPORT SheetIntensityLevels
 VirtualUnwrapping_EXPORT SheetIntensityLevels
 EstimateSheetIntensityLevels(std::vector<float> air, std::vector<float> material);
 
+/** Two-class clustering of a sample of a scan's values, started from `levels`: every value
+ * is classed by the midpoint of the air and sheet levels and each level becomes its class's
+ * median, until the midpoint settles (Ridler and Calvard's iterative selection, with
+ * medians). On a smoothed noisy scan it finds the levels that a threshold near the air's
+ * level (Otsu's, when the sheet is a small share of the voxels) hides: the material side of
+ * such a threshold is mostly noise. The noise is kept from `levels`. */
+VirtualUnwrapping_EXPORT SheetIntensityLevels
+RefineSheetIntensityLevels(const std::vector<float> & values, SheetIntensityLevels levels);
+
 /** \class SheetMidSurfaceExtractor
  * \brief Builds an open, grid-structured triangle mesh on the mid-surface of one rolled or
  * folded sheet from its segmentation mask (and, optionally, the CT intensities), on plain

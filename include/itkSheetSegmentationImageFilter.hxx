@@ -262,7 +262,20 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
     smoothing->SetSigmaArray(sigmas);
     if (m_AutomaticThreshold && levels.Sheet > levels.Air)
     {
-      // Halfway between air and sheet: the smoothed scan has lost the noise that set Otsu's.
+      // Halfway between air and sheet as the smoothed scan has them: it has lost the noise
+      // that set Otsu's threshold, which a sheet filling a small share of the scan pulls
+      // towards the air, and with it the sheet's level measured above that threshold.
+      smoothing->Update();
+      const RealImageType * smoothed = smoothing->GetOutput();
+      const size_t          count = smoothed->GetBufferedRegion().GetNumberOfPixels();
+      const size_t          stride = std::max<size_t>(1, count / 400000);
+      std::vector<float>    sample;
+      sample.reserve(count / stride + 1);
+      for (size_t i = 0; i < count; i += stride)
+      {
+        sample.push_back(smoothed->GetBufferPointer()[i]);
+      }
+      levels = RefineSheetIntensityLevels(sample, levels);
       m_Threshold = 0.5 * (levels.Air + levels.Sheet);
     }
     auto threshold = BinaryThresholdImageFilter<RealImageType, MaskImageType>::New();

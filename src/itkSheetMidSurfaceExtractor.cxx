@@ -92,6 +92,40 @@ EstimateSheetIntensityLevels(std::vector<float> air, std::vector<float> material
   return levels;
 }
 
+SheetIntensityLevels
+RefineSheetIntensityLevels(const std::vector<float> & values, SheetIntensityLevels levels)
+{
+  std::vector<float> air, sheet;
+  for (int pass = 0; pass < 30 && levels.Sheet > levels.Air; ++pass)
+  {
+    const double midpoint = 0.5 * (levels.Air + levels.Sheet);
+    air.clear();
+    sheet.clear();
+    for (float v : values)
+    {
+      (v >= midpoint ? sheet : air).push_back(v);
+    }
+    if (air.empty() || sheet.empty())
+    {
+      break;
+    }
+    auto median = [](std::vector<float> & part) {
+      const auto middle = part.begin() + static_cast<std::ptrdiff_t>(part.size() / 2);
+      std::nth_element(part.begin(), middle, part.end());
+      return static_cast<double>(*middle);
+    };
+    const double airLevel = median(air), sheetLevel = median(sheet);
+    const bool   settled = std::abs(0.5 * (airLevel + sheetLevel) - midpoint) <= 1e-3 * (sheetLevel - airLevel);
+    levels.Air = airLevel;
+    levels.Sheet = sheetLevel;
+    if (settled)
+    {
+      break;
+    }
+  }
+  return levels;
+}
+
 SheetMesh
 SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
 {

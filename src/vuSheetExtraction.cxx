@@ -163,12 +163,17 @@ Extraction::MeasureLevels()
   if (volume.Intensity != nullptr)
   {
     // Air and material levels: medians of a sample of the voxels outside and inside the mask.
+    // Beyond the scan's data (a tilted roll resampled) the padding, the scan's lowest value,
+    // is neither air nor sheet: left out, or it pulls the air's level down.
     std::vector<double> outside, inside;
     const size_t        total = nx * ny * nz;
     const size_t        stride = std::max<size_t>(1, total / 400000);
     for (size_t i = 0; i < total; i += stride)
     {
-      (volume.Mask[i] != 0 ? inside : outside).push_back(volume.Intensity[i]);
+      if (volume.Data == nullptr || volume.Data[i] != 0)
+      {
+        (volume.Mask[i] != 0 ? inside : outside).push_back(volume.Intensity[i]);
+      }
     }
     context.AirLevel = Median(outside);
     context.SheetLevel = Median(inside);
