@@ -137,7 +137,24 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
     double Step;
     size_t Slice{ 0 };
   };
-  std::vector<GridStep>    GridSteps;
+  std::vector<GridStep> GridSteps;
+  /** Roll method, with intensities: runs of grid points along a row that lie in air (the
+   * intensity the tracer reads below a quarter of the sheet's contrast above the air's
+   * level), at least three points long: a mesh traced between two turns, or stepping from
+   * one onto the next across a gap that the sideways-step check does not see (a step of
+   * less than 0.7 of the turn spacing into a wide gap). Row, first and last column of the
+   * run, the slice of the view nearest that row and the lowest level in the run (fraction
+   * of the contrast). Points beyond the scan's data, at the volume's border, in the first
+   * and last row and in the six columns at either end of a row are not checked. */
+  struct OffSheetRun
+  {
+    size_t Row;
+    size_t FirstColumn;
+    size_t LastColumn;
+    double Lowest;
+    size_t Slice{ 0 };
+  };
+  std::vector<OffSheetRun> OffSheetRuns;
   std::vector<std::string> Warnings;
 };
 
@@ -279,6 +296,19 @@ public:
    * the turn spacing. */
   static std::vector<SheetMidSurfaceReport::GridStep>
   FindGridSteps(const SheetMesh & mesh, double limit);
+
+  /** Runs of at least `minimumRun` grid points along a row (points in the view's frame,
+   * mm) where the view's intensity, as a fraction of (sheetLevel - airLevel) above airLevel
+   * (trilinear), is below `level`: see SheetMidSurfaceReport::OffSheetRun. Empty without
+   * intensities, for a mesh that is not a grid, or when sheetLevel <= airLevel. Extract
+   * runs it with a quarter of the contrast and runs of three. */
+  static std::vector<SheetMidSurfaceReport::OffSheetRun>
+  FindOffSheetRuns(const SheetMesh &       mesh,
+                   const SheetVolumeView & volume,
+                   double                  airLevel,
+                   double                  sheetLevel,
+                   double                  level = 0.25,
+                   size_t                  minimumRun = 3);
 
 private:
   SheetMidSurfaceParameters m_Parameters;

@@ -20,6 +20,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace itk {
 namespace {
@@ -120,5 +121,77 @@ SheetMidSurfaceExtractor::FindGridSteps(const SheetMesh & mesh, double limit)
     return a.Row != b.Row ? a.Row < b.Row : a.Column < b.Column;
   });
   return steps;
+}
+
+std::vector<SheetMidSurfaceReport::OffSheetRun>
+SheetMidSurfaceExtractor::FindOffSheetRuns(const SheetMesh &       mesh,
+                                           const SheetVolumeView & volume,
+                                           double                  airLevel,
+                                           double                  sheetLevel,
+                                           double                  level,
+                                           size_t                  minimumRun)
+{
+  std::vector<SheetMidSurfaceReport::OffSheetRun> runs;
+  const auto                                      rows = static_cast<size_t>(std::max(0, mesh.GridRows));
+  const auto                                      columns = static_cast<size_t>(std::max(0, mesh.GridColumns));
+  const long nx = static_cast<long>(volume.Size[0]), ny = static_cast<long>(volume.Size[1]),
+             nz = static_cast<long>(volume.Size[2]);
+  if (volume.Intensity == nullptr || !mesh.IsGridStructured() || rows * columns != mesh.GetNumberOfPoints() ||
+      rows < 3 || columns < 2 * EndColumns + minimumRun || !(sheetLevel > airLevel) || nx < 4 || ny < 4 || nz < 4)
+  {
+    return runs;
+  }
+  // The level at point p (view frame, mm) as a fraction of the contrast; NaN where it is
+  // not checked: within a voxel of the volume's border, or next to a voxel without data.
+  auto levelAt = [&](const double * p) {
+    const double u = p[0] / volume.Spacing[0], v = p[1] / volume.Spacing[1], w = p[2] / volume.Spacing[2];
+    if (!(u >= 1.0 && v >= 1.0 && w >= 1.0 && u < static_cast<double>(nx - 2) && v < static_cast<double>(ny - 2) &&
+          w < static_cast<double>(nz - 2)))
+    {
+      return std::numeric_limits<double>::quiet_NaN();
+    }
+    const auto   i = static_cast<long>(u), j = static_cast<long>(v), k = static_cast<long>(w);
+    const double a = u - static_cast<double>(i), b = v - static_cast<double>(j), c = w - static_cast<double>(k);
+    double       value = 0.0;
+    for (long dk = 0; dk < 2; ++dk)
+    {
+      for (long dj = 0; dj < 2; ++dj)
+      {
+        for (long di = 0; di < 2; ++di)
+        {
+          const auto index = static_cast<size_t>(((k + dk) * ny + (j + dj)) * nx + (i + di));
+          if (volume.Data != nullptr && volume.Data[index] == 0)
+          {
+            return std::numeric_limits<double>::quiet_NaN();
+          }
+          value += (di ? a : 1.0 - a) * (dj ? b : 1.0 - b) * (dk ? c : 1.0 - c) * volume.Intensity[index];
+        }
+      }
+    }
+    return (value - airLevel) / (sheetLevel - airLevel);
+  };
+  for (size_t r = 1; r + 1 < rows; ++r)
+  {
+    size_t first = 0, count = 0;
+    double lowest = 0.0;
+    for (size_t c = EndColumns; c + EndColumns <= columns; ++c)
+    {
+      const double value = c + EndColumns < columns ? levelAt(&mesh.Points[3 * (r * columns + c)])
+                                                    : std::numeric_limits<double>::quiet_NaN();
+      if (value < level)
+      {
+        first = count == 0 ? c : first;
+        lowest = count == 0 ? value : std::min(lowest, value);
+        ++count;
+        continue;
+      }
+      if (count >= minimumRun)
+      {
+        runs.push_back({ r, first, first + count - 1, lowest });
+      }
+      count = 0;
+    }
+  }
+  return runs;
 }
 } // namespace itk

@@ -674,6 +674,22 @@ Extraction::BuildMesh()
       const double z = mesh.Points[3 * (step.Row * columns + step.Column) + 2];
       step.Slice = static_cast<size_t>(std::clamp(std::lround(z / sz), 0L, static_cast<long>(nz) - 1));
     }
+    m_Report.OffSheetRuns =
+      SheetMidSurfaceExtractor::FindOffSheetRuns(mesh, volume, context.AirLevel, context.SheetLevel);
+    for (auto & run : m_Report.OffSheetRuns)
+    {
+      const double z = mesh.Points[3 * (run.Row * columns + run.FirstColumn) + 2];
+      run.Slice = static_cast<size_t>(std::clamp(std::lround(z / sz), 0L, static_cast<long>(nz) - 1));
+    }
+    if (!m_Report.OffSheetRuns.empty())
+    {
+      const auto &       first = m_Report.OffSheetRuns.front();
+      std::ostringstream text;
+      text << "the mesh lies in air (below a quarter of the sheet's contrast) along " << m_Report.OffSheetRuns.size()
+           << " run(s) of grid points (possible layer jumps: traced between turns), first at grid row " << first.Row
+           << ", columns " << first.FirstColumn << "-" << first.LastColumn << " (slice " << first.Slice << ")";
+      m_Report.Warnings.push_back(text.str());
+    }
     if (!m_Report.GridSteps.empty())
     {
       const auto &       first = m_Report.GridSteps.front();

@@ -304,6 +304,56 @@ TEST(SheetMidSurfaceExtractor, GridStepsNameAMeshThatJumpsATurn)
   EXPECT_GT(alongAxis, 0u);
 }
 
+TEST(SheetMidSurfaceExtractor, OffSheetRunsNameAMeshTracedBetweenTurns)
+{
+  // The spiral's mask as intensities (air 0, sheet 1): the mesh traced on it lies on the
+  // sheet everywhere, so no run of it is in air.
+  const SpiralVolume volume(12);
+  std::vector<float> values(volume.Mask.begin(), volume.Mask.end());
+  auto               view = volume.View();
+  view.Intensity = values.data();
+  itk::SheetMidSurfaceExtractor extractor;
+  itk::SheetMesh                mesh = extractor.Extract(view);
+  EXPECT_TRUE(extractor.GetReport().OffSheetRuns.empty());
+  EXPECT_TRUE(itk::SheetMidSurfaceExtractor::FindOffSheetRuns(mesh, view, 0.0, 1.0).empty());
+
+  // Five points of one row, in the middle of the sheet, moved outwards by half a turn
+  // spacing (into the middle of the gap, 3 voxels from both turns): one run, exactly
+  // those points. Moved by a whole turn spacing instead (onto the next turn) they are on a
+  // sheet again: that is the sideways-step check's to see.
+  const auto columns = static_cast<size_t>(mesh.GridColumns);
+  ASSERT_GE(mesh.GridRows, 3);
+  const size_t row = static_cast<size_t>(mesh.GridRows) / 2, from = columns / 2 - 2, to = columns / 2 + 2;
+  auto         moved = [&](double distance) {
+    itk::SheetMesh copy = mesh;
+    for (size_t c = from; c <= to; ++c)
+    {
+      double *     p = &copy.Points[3 * (row * columns + c)];
+      const double x = p[0] - 40.0, y = p[1] - 40.0, r = std::hypot(x, y);
+      p[0] += distance * x / r;
+      p[1] += distance * y / r;
+    }
+    return copy;
+  };
+  const auto runs = itk::SheetMidSurfaceExtractor::FindOffSheetRuns(moved(3.0), view, 0.0, 1.0);
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0].Row, row);
+  EXPECT_EQ(runs[0].FirstColumn, from);
+  EXPECT_EQ(runs[0].LastColumn, to);
+  EXPECT_LT(runs[0].Lowest, 0.25);
+  EXPECT_TRUE(itk::SheetMidSurfaceExtractor::FindOffSheetRuns(moved(6.0), view, 0.0, 1.0).empty());
+  // A run shorter than the minimum is not named; without intensities, or where the scan
+  // holds no data, nothing is checked.
+  EXPECT_TRUE(itk::SheetMidSurfaceExtractor::FindOffSheetRuns(moved(3.0), view, 0.0, 1.0, 0.25, 6).empty());
+  auto maskOnly = view;
+  maskOnly.Intensity = nullptr;
+  EXPECT_TRUE(itk::SheetMidSurfaceExtractor::FindOffSheetRuns(moved(3.0), maskOnly, 0.0, 1.0).empty());
+  const std::vector<uint8_t> noData(volume.Mask.size(), 0);
+  auto                       beyondTheScan = view;
+  beyondTheScan.Data = noData.data();
+  EXPECT_TRUE(itk::SheetMidSurfaceExtractor::FindOffSheetRuns(moved(3.0), beyondTheScan, 0.0, 1.0).empty());
+}
+
 TEST(SheetMidSurfaceExtractor, ProgressCallbackAborts)
 {
   const SpiralVolume            volume;

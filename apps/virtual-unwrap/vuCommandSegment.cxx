@@ -278,11 +278,21 @@ TraceJson(const itk::SheetMidSurfaceReport & report)
                       { "along", step.AlongAxis ? "axis" : "sheet" },
                       { "step_mm", step.Step } });
   }
+  nlohmann::json offSheet = nlohmann::json::array();
+  for (const auto & run : report.OffSheetRuns)
+  {
+    offSheet.push_back({ { "row", run.Row },
+                         { "first_column", run.FirstColumn },
+                         { "last_column", run.LastColumn },
+                         { "slice", run.Slice },
+                         { "lowest_level", run.Lowest } });
+  }
   nlohmann::json json = { { "method", itk::ToString(report.Method) },
                           { "interpolated_slices", report.InterpolatedSlices },
                           { "low_confidence_regions", regions },
                           { "layer_jumps", jumps },
                           { "mesh_steps", steps },
+                          { "off_sheet", offSheet },
                           { "slices", "indices of the slices across the roll axis (after any resampling along it)" } };
   if (report.Method == itk::SheetSurfaceMethodEnum::Roll)
   {
