@@ -668,18 +668,21 @@ Extraction::BuildMesh()
   {
     // A layer jump the slice-to-slice check missed shows on the mesh as a sideways step
     // of about a turn spacing.
+    // The slice of the view nearest grid point (row, column).
+    auto sliceAt = [&](size_t row, size_t column) {
+      const double z = mesh.Points[3 * (row * columns + column) + 2];
+      return static_cast<size_t>(std::clamp(std::lround(z / sz), 0L, static_cast<long>(nz) - 1));
+    };
     m_Report.GridSteps = SheetMidSurfaceExtractor::FindGridSteps(mesh, GridStepFraction * m_Report.TurnSpacing);
     for (auto & step : m_Report.GridSteps)
     {
-      const double z = mesh.Points[3 * (step.Row * columns + step.Column) + 2];
-      step.Slice = static_cast<size_t>(std::clamp(std::lround(z / sz), 0L, static_cast<long>(nz) - 1));
+      step.Slice = sliceAt(step.Row, step.Column);
     }
     m_Report.OffSheetRuns =
       SheetMidSurfaceExtractor::FindOffSheetRuns(mesh, volume, context.AirLevel, context.SheetLevel);
     for (auto & run : m_Report.OffSheetRuns)
     {
-      const double z = mesh.Points[3 * (run.Row * columns + run.FirstColumn) + 2];
-      run.Slice = static_cast<size_t>(std::clamp(std::lround(z / sz), 0L, static_cast<long>(nz) - 1));
+      run.Slice = sliceAt(run.Row, run.FirstColumn);
     }
     if (!m_Report.OffSheetRuns.empty())
     {
