@@ -51,6 +51,10 @@ namespace itk {
  *   or 1 x 1 x 1 with a warning, origin 0, identity direction.
  * - a single volume file: NRRD, MetaImage (.mha/.mhd), NIfTI, multi-page TIFF (geometry
  *   from the file, except TIFF which is treated like a stack).
+ * - a Zarr v2 array or an OME-Zarr image (a directory, read by itk::ZarrImageIO chunk by
+ *   chunk: a region of interest opens only the chunks it overlaps). OME-Zarr gives the
+ *   voxel size and origin; a bare array has none (1 x 1 x 1 mm unless SpacingOverride, with
+ *   a warning).
  *
  * Geometry of a DICOM series, measured on the headers before any pixel is read
  * (itk::DicomSeriesGeometry): mixed image sizes, pixel spacings or orientations, duplicate
@@ -275,6 +279,8 @@ private:
   ExamineSliceStack(std::vector<std::string> files);
   void
   ExamineVolumeFile(const std::string & file);
+  void
+  ExamineZarrStore();
   void
   BuildPipeline();
   /** After a failed read: the first file of the region of interest that cannot be read. */

@@ -12,10 +12,11 @@ VU_PACKAGES=(
   libinsighttoolkit5-dev libfftw3-dev libgdcm-dev libgdcm-tools
   libvtk9-dev libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libfreetype-dev fonts-dejavu-core
-  libsuitesparse-dev libopenblas0-pthread
+  libsuitesparse-dev libopenblas0-pthread libblosc-dev
   qtbase5-dev libvtk9-qt-dev xvfb xauth
   tesseract-ocr tesseract-ocr-eng time
   python3 python3-numpy python3-matplotlib python3-pydicom python3-tifffile python3-scipy
+  python3-zarr
 )
 
 vu_missing_packages() {

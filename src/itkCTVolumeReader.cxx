@@ -28,6 +28,7 @@
 #include "itkImageIOFactory.h"
 #include "itkImageSeriesReader.h"
 #include "itkProgressAccumulator.h"
+#include "itkZarrImageIO.h"
 #include "itksys/Glob.hxx"
 
 #include "gdcmDirectory.h"
@@ -53,6 +54,10 @@ NewFileReader(const std::string & file, bool dicom)
   if (dicom)
   {
     reader->SetImageIO(GDCMImageIO::New());
+  }
+  else if (auto zarr = ZarrImageIO::New(); zarr->CanReadFile(file.c_str()))
+  {
+    reader->SetImageIO(zarr);
   }
   else if (auto io = detail::CheckedMetaImageIO::New(); io->CanReadFile(file.c_str()))
   {
@@ -213,6 +218,10 @@ CTVolumeReader::GenerateOutputInformation()
     else if (!exists)
     {
       throw std::runtime_error("no such file or directory: " + m_FileName);
+    }
+    else if (ZarrImageIO::New()->CanReadFile(m_FileName.c_str()))
+    {
+      this->ExamineZarrStore();
     }
     else if (fs::is_directory(m_FileName, error))
     {

@@ -30,6 +30,7 @@
 #include "itkImageIOFactory.h"
 #include "itkImageSeriesReader.h"
 #include "itkProgressAccumulator.h"
+#include "itkZarrImageIO.h"
 #include "itksys/Glob.hxx"
 
 #include "gdcmDirectory.h"
@@ -440,6 +441,32 @@ CTVolumeReader::ExamineVolumeFile(const std::string & file)
     }
   }
   m_SliceFileNames = { file };
+}
+
+void
+CTVolumeReader::ExamineZarrStore()
+{
+  auto io = ZarrImageIO::New();
+  io->SetFileName(m_FileName);
+  try
+  {
+    io->ReadImageInformation();
+  }
+  catch (const ExceptionObject & e)
+  {
+    throw std::runtime_error(e.GetDescription());
+  }
+  if (io->GetNumberOfDimensions() < 3 || io->GetDimensions(2) < 2)
+  {
+    throw std::runtime_error(m_FileName + " is a 2D image (" + SizeText(io.GetPointer()) + "), not a volume");
+  }
+  m_PixelType = ComponentTypeName(io->GetComponentType(), io->GetComponentSize());
+  m_InputKind = io->GetHasGeometry() ? "OME-Zarr image" : "Zarr array";
+  if (!io->GetHasGeometry() && !m_OverrideSpacing)
+  {
+    m_Warnings.push_back("no voxel size given for a Zarr array without OME-Zarr metadata: using 1 x 1 x 1 mm");
+  }
+  m_SliceFileNames = { m_FileName };
 }
 
 } // end namespace itk

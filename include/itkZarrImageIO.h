@@ -1,0 +1,181 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+#ifndef itkZarrImageIO_h
+#define itkZarrImageIO_h
+
+#include "VirtualUnwrappingExport.h"
+
+#include "itkImageIOBase.h"
+#include "itkObjectFactoryBase.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace itk {
+/** \class ZarrImageIO
+ * \brief Reads a volume stored as a Zarr v2 array on disk (a directory of chunk files), as
+ * the field stores scroll scans, chunk by chunk: only the chunks that a requested region
+ * touches are opened and decompressed, so a volume larger than memory can be read a region
+ * at a time (streaming through ImageFileReader or CTVolumeReader).
+ *
+ * FileName may be:
+ * - a Zarr array: a directory holding `.zarray` (and optionally `.zattrs`). Its shape is
+ *   read as (z, y, x), the last axis varying fastest, and becomes the ITK image's (x, y, z).
+ *   No voxel size is stored in a bare array: spacing 1, origin 0 (CTVolumeReader warns).
+ * - an OME-Zarr image (NGFF 0.4): a group whose `.zattrs` holds `multiscales`; the first
+ *   (full-resolution) dataset is read, with the voxel size and origin of its `scale` and
+ *   `translation` transformations, converted to millimetres from the axes' units
+ *   (micrometer, nanometer, millimeter, centimeter, meter; a unitless axis is taken in mm).
+ *   Leading time or channel axes must have length 1.
+ * The array may have any chunk shape, `dimension_separator` "." or "/", fill value for the
+ * chunks that are absent (written by zarr as all fill value), C order, little-endian (or
+ * single-byte) integers of 8, 16 or 32 bits or floats of 32 or 64 bits, and chunks stored
+ * raw, or compressed by blosc (every codec the Debian blosc library decodes: blosclz, lz4,
+ * lz4hc, zlib, zstd, with any shuffle) or by zlib or gzip. Anything else (Fortran order,
+ * big-endian data, filters, other compressors) is refused with the reason, as is a chunk
+ * file that does not decompress to the chunk's size.
+ *
+ * GetNumberOfChunksRead() counts the chunk files opened by the last Read(): a region read
+ * touches only the chunks it overlaps.
+ *
+ * Writing is not supported. References: Zarr storage specification v2
+ * (https://zarr.readthedocs.io/en/stable/spec/v2.html); OME-NGFF 0.4
+ * (https://ngff.openmicroscopy.org/0.4/).
+ * \ingroup VirtualUnwrapping
+ */
+class VirtualUnwrapping_EXPORT ZarrImageIO : public ImageIOBase
+{
+public:
+  ITK_DISALLOW_COPY_AND_MOVE(ZarrImageIO);
+
+  using Self = ZarrImageIO;
+  using Superclass = ImageIOBase;
+  using Pointer = SmartPointer<Self>;
+
+  itkNewMacro(Self);
+  itkTypeMacro(ZarrImageIO, ImageIOBase);
+
+  /** A directory holding `.zarray`, or an OME-Zarr group (`.zattrs` with multiscales). */
+  bool
+  CanReadFile(const char * fileName) override;
+
+  bool
+  CanStreamRead() override
+  {
+    return true;
+  }
+
+  bool
+  SupportsDimension(unsigned long dimension) override
+  {
+    return dimension >= 2 && dimension <= 3;
+  }
+
+  void
+  ReadImageInformation() override;
+
+  /** The requested region itself when streamed reading is on (ImageFileReader's
+   * UseStreaming, the default), otherwise the whole array. */
+  ImageIORegion
+  GenerateStreamableReadRegionFromRequestedRegion(const ImageIORegion & requested) const override;
+
+  /** Reads the IORegion into the buffer, chunk by chunk. */
+  void
+  Read(void * buffer) override;
+
+  bool
+  CanWriteFile(const char *) override
+  {
+    return false;
+  }
+
+  void
+  WriteImageInformation() override
+  {}
+
+  void
+  Write(const void *) override;
+
+  /** Chunk files opened by the last Read(). */
+  itkGetConstMacro(NumberOfChunksRead, SizeValueType);
+
+  /** The array directory read (the first dataset of an OME-Zarr group), after
+   * ReadImageInformation(). */
+  itkGetStringMacro(ArrayPath);
+
+  /** Whether the geometry (voxel size, origin) came from OME-Zarr metadata. */
+  itkGetConstMacro(HasGeometry, bool);
+
+protected:
+  ZarrImageIO();
+  ~ZarrImageIO() override = default;
+  void
+  PrintSelf(std::ostream & os, Indent indent) const override;
+
+private:
+  enum class Codec
+  {
+    None,
+    Blosc,
+    Zlib
+  };
+
+  void
+  ReadChunk(const std::vector<SizeValueType> & chunkIndex, std::vector<char> & data) const;
+
+  std::string                m_ArrayPath;
+  std::vector<SizeValueType> m_Shape;  // Zarr order (slowest first)
+  std::vector<SizeValueType> m_Chunks; // Zarr order
+  unsigned int               m_LeadingAxes{ 0 };
+  std::string                m_Separator{ "." };
+  Codec                      m_Codec{ Codec::None };
+  std::vector<char>          m_FillValue; // one element, in the stored type
+  SizeValueType              m_NumberOfChunksRead{ 0 };
+  bool                       m_HasGeometry{ false };
+};
+
+/** \class ZarrImageIOFactory
+ * \brief Makes ZarrImageIO available to ImageFileReader:
+ * `itk::ObjectFactoryBase::RegisterFactory(itk::ZarrImageIOFactory::New())`.
+ * \ingroup VirtualUnwrapping
+ */
+class VirtualUnwrapping_EXPORT ZarrImageIOFactory : public ObjectFactoryBase
+{
+public:
+  ITK_DISALLOW_COPY_AND_MOVE(ZarrImageIOFactory);
+
+  using Self = ZarrImageIOFactory;
+  using Superclass = ObjectFactoryBase;
+  using Pointer = SmartPointer<Self>;
+
+  itkFactorylessNewMacro(Self);
+  itkTypeMacro(ZarrImageIOFactory, ObjectFactoryBase);
+
+  const char *
+  GetITKSourceVersion() const override;
+  const char *
+  GetDescription() const override;
+
+protected:
+  ZarrImageIOFactory();
+  ~ZarrImageIOFactory() override = default;
+};
+} // namespace itk
+
+#endif

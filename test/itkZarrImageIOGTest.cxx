@@ -1,0 +1,345 @@
+/*=========================================================================
+ *
+ *  Copyright NumFOCUS
+ *
+ *  Licensed under the Apache License, Version 2.0 (the "License");
+ *  you may not use this file except in compliance with the License.
+ *  You may obtain a copy of the License at
+ *
+ *         http://www.apache.org/licenses/LICENSE-2.0.txt
+ *
+ *  Unless required by applicable law or agreed to in writing, software
+ *  distributed under the License is distributed on an "AS IS" BASIS,
+ *  WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+ *  See the License for the specific language governing permissions and
+ *  limitations under the License.
+ *
+ *=========================================================================*/
+// ZarrImageIO on stores written by python3-zarr (test/zarr_stores.py, its shapes, chunks,
+// types and compressors drawn at run time): every voxel, the OME-Zarr geometry, region
+// reads that open only the chunks they overlap, and the refusals.
+#include "itkCTVolumeReader.h"
+#include "itkImageFileReader.h"
+#include "itkImageRegionConstIteratorWithIndex.h"
+#include "itkZarrImageIO.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+
+namespace {
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+using ImageType = itk::Image<double, 3>;
+
+const std::string &
+StoreDirectory()
+{
+  static const std::string directory = std::string(VU_BINARY_DIR) + "/Testing/Zarr";
+  return directory;
+}
+
+Json
+Manifest()
+{
+  std::ifstream in(StoreDirectory() + "/manifest.json");
+  if (!in)
+  {
+    throw std::runtime_error("no manifest: run test/zarr_stores.py " + StoreDirectory() + " first");
+  }
+  return Json::parse(in);
+}
+
+// The value test/zarr_stores.py wrote at (x, y, z), in the store's type.
+double
+Expected(const Json & store, long x, long y, long z)
+{
+  const std::string dtype = store["dtype"].get<std::string>().substr(1);
+  const auto        c = store["coefficients"];
+  if (const Json & hole = store["hole_chunk_zyx"]; !hole.is_null())
+  {
+    const auto chunks = store["chunks_zyx"];
+    if (z / chunks[0].get<long>() == hole[0].get<long>() && y / chunks[1].get<long>() == hole[1].get<long>() &&
+        x / chunks[2].get<long>() == hole[2].get<long>())
+    {
+      return store["fill"].get<double>();
+    }
+  }
+  if (dtype[0] == 'f')
+  {
+    const double v = c[0].get<double>() * x + c[1].get<double>() * y + c[2].get<double>() * z + c[3].get<double>();
+    return dtype == "f4" ? static_cast<double>(static_cast<float>(v)) : v;
+  }
+  const int       bits = 8 * (dtype[1] - '0');
+  const bool      isSigned = dtype[0] == 'i';
+  const long long span = 1LL << bits;
+  const long long low = isSigned ? -(span / 2) : 0;
+  long long       v =
+    c[0].get<long long>() * x + c[1].get<long long>() * y + c[2].get<long long>() * z + c[3].get<long long>();
+  v = ((v % span) + span) % span + low;
+  return static_cast<double>(v);
+}
+
+ImageType::Pointer
+ReadRegion(const std::string & path, const ImageType::RegionType * region, itk::ZarrImageIO * io)
+{
+  auto reader = itk::ImageFileReader<ImageType>::New();
+  reader->SetFileName(path);
+  reader->SetImageIO(io);
+  reader->UpdateOutputInformation();
+  if (region != nullptr)
+  {
+    reader->GetOutput()->SetRequestedRegion(*region);
+  }
+  reader->Update();
+  return reader->GetOutput();
+}
+
+// Values of the image over its buffered region against the store's formula; the count of
+// voxels that differ.
+size_t
+Mismatches(const Json & store, const ImageType * image)
+{
+  size_t bad = 0;
+  for (itk::ImageRegionConstIteratorWithIndex<ImageType> it(image, image->GetBufferedRegion()); !it.IsAtEnd(); ++it)
+  {
+    const auto   index = it.GetIndex();
+    const double expected = Expected(store, index[0], index[1], index[2]);
+    if (std::abs(it.Get() - expected) > 1e-9 * std::max(1.0, std::abs(expected)))
+    {
+      if (bad++ < 3)
+      {
+        ADD_FAILURE() << store["name"] << " at " << index << ": " << it.Get() << ", expected " << expected;
+      }
+    }
+  }
+  return bad;
+}
+
+std::vector<long>
+ShapeXyz(const Json & store)
+{
+  const auto shape = store["shape_zyx"];
+  return { shape[2].get<long>(), shape[1].get<long>(), shape[0].get<long>() };
+}
+} // namespace
+
+TEST(ZarrImageIO, EveryStoreIsReadVoxelByVoxel)
+{
+  const Json manifest = Manifest();
+  std::cout << "stores written with seed " << manifest["seed"] << std::endl;
+  for (const Json & store : manifest["stores"])
+  {
+    if (store["kind"] == "flat")
+    {
+      continue;
+    }
+    const std::string path = StoreDirectory() + "/" + store["name"].get<std::string>();
+    auto              io = itk::ZarrImageIO::New();
+    ASSERT_TRUE(io->CanReadFile(path.c_str())) << path;
+    const ImageType::Pointer image = ReadRegion(path, nullptr, io);
+    const auto               size = image->GetLargestPossibleRegion().GetSize();
+    const auto               shape = ShapeXyz(store);
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      EXPECT_EQ(static_cast<long>(size[d]), shape[d]) << store["name"] << " axis " << d;
+    }
+    EXPECT_EQ(Mismatches(store, image), 0u) << store["name"] << " (" << store["dtype"] << ", " << store["codec"]
+                                            << ", separator " << store["separator"] << ")";
+    if (store["kind"] == "ome")
+    {
+      EXPECT_TRUE(io->GetHasGeometry());
+      for (unsigned d = 0; d < 3; ++d)
+      {
+        EXPECT_NEAR(image->GetSpacing()[d], 1e-3 * store["scale_um_zyx"][2 - d].get<double>(), 1e-12);
+        EXPECT_NEAR(image->GetOrigin()[d], 1e-3 * store["translation_um_zyx"][2 - d].get<double>(), 1e-12);
+      }
+    }
+    else
+    {
+      EXPECT_FALSE(io->GetHasGeometry());
+    }
+  }
+}
+
+TEST(ZarrImageIO, ARegionReadOpensOnlyTheChunksItOverlaps)
+{
+  const Json     manifest = Manifest();
+  const unsigned seed = std::random_device{}();
+  std::mt19937   random(seed);
+  std::cout << "regions drawn with seed " << seed << std::endl;
+  for (const Json & store : manifest["stores"])
+  {
+    if (store["kind"] == "flat")
+    {
+      continue;
+    }
+    const std::string path = StoreDirectory() + "/" + store["name"].get<std::string>();
+    const auto        shape = ShapeXyz(store);
+    for (int trial = 0; trial < 4; ++trial)
+    {
+      ImageType::RegionType region;
+      size_t                expectedChunks = 1;
+      for (unsigned d = 0; d < 3; ++d)
+      {
+        const long first = std::uniform_int_distribution<long>(0, shape[d] - 1)(random);
+        const long last = std::uniform_int_distribution<long>(first, shape[d] - 1)(random);
+        region.SetIndex(d, first);
+        region.SetSize(d, static_cast<itk::SizeValueType>(last - first + 1));
+        const long chunk = store["chunks_zyx"][2 - d].get<long>();
+        expectedChunks *= static_cast<size_t>(last / chunk - first / chunk + 1);
+      }
+      auto                     io = itk::ZarrImageIO::New();
+      const ImageType::Pointer image = ReadRegion(path, &region, io);
+      EXPECT_EQ(image->GetBufferedRegion(), region) << store["name"];
+      EXPECT_EQ(io->GetNumberOfChunksRead(), expectedChunks) << store["name"] << " region " << region;
+      EXPECT_EQ(Mismatches(store, image), 0u) << store["name"] << " region " << region;
+    }
+  }
+}
+
+TEST(ZarrImageIO, TheFactoryLetsImageFileReaderFindIt)
+{
+  itk::ObjectFactoryBase::RegisterFactory(itk::ZarrImageIOFactory::New());
+  const Json manifest = Manifest();
+  for (const Json & store : manifest["stores"])
+  {
+    if (store["name"] == "ome")
+    {
+      auto reader = itk::ImageFileReader<ImageType>::New();
+      reader->SetFileName(StoreDirectory() + "/ome");
+      reader->Update();
+      EXPECT_STREQ(reader->GetImageIO()->GetNameOfClass(), "ZarrImageIO");
+      EXPECT_EQ(Mismatches(store, reader->GetOutput()), 0u);
+    }
+  }
+}
+
+TEST(ZarrImageIO, CTVolumeReaderReadsZarrWithItsGeometryAndARegionOfInterest)
+{
+  const Json manifest = Manifest();
+  for (const Json & store : manifest["stores"])
+  {
+    if (store["kind"] == "flat")
+    {
+      auto reader = itk::CTVolumeReader::New();
+      reader->SetFileName(StoreDirectory() + "/flat");
+      try
+      {
+        reader->Update();
+        ADD_FAILURE() << "a 2D Zarr array was read as a volume";
+      }
+      catch (const itk::ExceptionObject & e)
+      {
+        EXPECT_NE(std::string(e.GetDescription()).find("not a volume"), std::string::npos) << e.GetDescription();
+      }
+      continue;
+    }
+    const auto shape = ShapeXyz(store);
+    auto       reader = itk::CTVolumeReader::New();
+    reader->SetFileName(StoreDirectory() + "/" + store["name"].get<std::string>());
+    itk::CTVolumeReader::RegionType roi;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      roi.SetIndex(d, shape[d] / 3);
+      roi.SetSize(d, static_cast<itk::SizeValueType>(std::max(1L, shape[d] / 2)));
+    }
+    reader->SetRegionOfInterest(roi);
+    reader->UseRegionOfInterestOn();
+    reader->Update();
+    const bool ome = store["kind"] == "ome";
+    EXPECT_EQ(std::string(reader->GetInputKind()), ome ? "OME-Zarr image" : "Zarr array");
+    bool warned = false;
+    for (const std::string & w : reader->GetWarnings())
+    {
+      warned = warned || w.find("no voxel size") != std::string::npos;
+    }
+    EXPECT_EQ(warned, !ome) << store["name"];
+    // The region of interest is indexed from 0: voxel i holds the store's voxel roi + i.
+    const auto * image = reader->GetOutput();
+    EXPECT_EQ(image->GetLargestPossibleRegion().GetSize(), roi.GetSize());
+    size_t bad = 0;
+    for (itk::ImageRegionConstIteratorWithIndex<itk::CTVolumeReader::OutputImageType> it(
+           image, image->GetLargestPossibleRegion());
+         !it.IsAtEnd();
+         ++it)
+    {
+      const auto   i = it.GetIndex();
+      const double expected = Expected(store, i[0] + roi.GetIndex(0), i[1] + roi.GetIndex(1), i[2] + roi.GetIndex(2));
+      bad += std::abs(it.Get() - expected) > 1e-5 * std::max(1.0, std::abs(expected)) ? 1 : 0;
+    }
+    EXPECT_EQ(bad, 0u) << store["name"];
+    if (ome)
+    {
+      EXPECT_NEAR(image->GetSpacing()[0], 1e-3 * store["scale_um_zyx"][2].get<double>(), 1e-9);
+    }
+  }
+}
+
+TEST(ZarrImageIO, DamagedOrUnsupportedStoresAreRefusedWithTheReason)
+{
+  const Json manifest = Manifest();
+  // A compressed store whose first chunk file is cut short, and a big-endian copy.
+  const Json * compressed = nullptr;
+  for (const Json & store : manifest["stores"])
+  {
+    if (compressed == nullptr && store["kind"] == "array" && store["codec"] != "none" && store["separator"] == ".")
+    {
+      compressed = &store;
+    }
+  }
+  ASSERT_NE(compressed, nullptr) << "no compressed store with '.' separators was drawn";
+  const fs::path source = fs::path(StoreDirectory()) / (*compressed)["name"].get<std::string>();
+  const fs::path damaged = fs::path(StoreDirectory()) / "damaged";
+  fs::remove_all(damaged);
+  fs::copy(source, damaged, fs::copy_options::recursive);
+  fs::path chunk;
+  for (const auto & entry : fs::directory_iterator(damaged))
+  {
+    if (entry.path().filename().string()[0] != '.')
+    {
+      chunk = entry.path();
+      break;
+    }
+  }
+  ASSERT_FALSE(chunk.empty());
+  fs::resize_file(chunk, fs::file_size(chunk) / 2);
+  auto io = itk::ZarrImageIO::New();
+  try
+  {
+    ReadRegion(damaged.string(), nullptr, io);
+    ADD_FAILURE() << "a truncated chunk was read";
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    EXPECT_NE(std::string(e.GetDescription()).find(chunk.filename().string()), std::string::npos) << e.GetDescription();
+  }
+
+  fs::resize_file(chunk, 0);
+  fs::remove(chunk);
+  std::ifstream in(damaged / ".zarray");
+  Json          meta = Json::parse(in);
+  in.close();
+  std::string dtype = meta["dtype"];
+  dtype[0] = '>';
+  meta["dtype"] = dtype == ">u1" || dtype == ">i1" ? ">u2" : dtype;
+  std::ofstream(damaged / ".zarray") << meta.dump();
+  auto reader = itk::CTVolumeReader::New();
+  reader->SetFileName(damaged.string());
+  try
+  {
+    reader->Update();
+    ADD_FAILURE() << "a big-endian store was read";
+  }
+  catch (const itk::ExceptionObject & e)
+  {
+    EXPECT_NE(std::string(e.GetDescription()).find("little-endian"), std::string::npos) << e.GetDescription();
+  }
+  fs::remove_all(damaged);
+}
