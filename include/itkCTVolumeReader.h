@@ -51,6 +51,12 @@ namespace itk {
  *   or 1 x 1 x 1 with a warning, origin 0, identity direction.
  * - a single volume file: NRRD, MetaImage (.mha/.mhd), NIfTI, multi-page TIFF (geometry
  *   from the file, except TIFF which is treated like a stack).
+ * - a volume-cartographer volume package (`NAME.volpkg`: config.json, volumes/ID/) or one
+ *   of its volume directories (meta.json beside the TIFF slices): the slices as a stack,
+ *   the voxel size from meta.json's `voxelsize` (micrometres). In a package with several
+ *   volumes SeriesIdentifier chooses one by directory name, uuid or name, otherwise the one
+ *   with the most slices is read and a warning names the others. A slice count that
+ *   differs from meta.json's is refused.
  * - a Zarr v2 array or an OME-Zarr image (a directory, read by itk::ZarrImageIO chunk by
  *   chunk: a region of interest opens only the chunks it overlaps). OME-Zarr gives the
  *   voxel size and origin; a bare array has none (1 x 1 x 1 mm unless SpacingOverride, with
@@ -81,7 +87,8 @@ namespace itk {
  * runs with their positions.
  *
  * Parameters (all optional):
- * - SeriesIdentifier: SeriesInstanceUID or series number; default "" (most slices).
+ * - SeriesIdentifier: SeriesInstanceUID or series number (a volume package: the volume's
+ *   directory name, uuid or name); default "" (most slices).
  * - SpacingOverride, OverrideSpacing: voxel size in mm (each > 0) that replaces the
  *   spacing of any input; default off.
  * - RegionOfInterest, UseRegionOfInterest: a box in voxel indices of the full volume,
@@ -281,6 +288,9 @@ private:
   ExamineVolumeFile(const std::string & file);
   void
   ExamineZarrStore();
+  /** A volume-cartographer package or volume directory: false when the directory is not one. */
+  bool
+  ExamineVolumePackage();
   void
   BuildPipeline();
   /** After a failed read: the first file of the region of interest that cannot be read. */

@@ -223,6 +223,10 @@ CTVolumeReader::GenerateOutputInformation()
     {
       this->ExamineZarrStore();
     }
+    else if (fs::is_directory(m_FileName, error) && this->ExamineVolumePackage())
+    {
+      // A volume-cartographer package or volume: its TIFF slices with the voxel size.
+    }
     else if (fs::is_directory(m_FileName, error))
     {
       std::vector<std::string> listed;

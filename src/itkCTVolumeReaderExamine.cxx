@@ -35,10 +35,13 @@
 
 #include "gdcmDirectory.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -441,6 +444,123 @@ CTVolumeReader::ExamineVolumeFile(const std::string & file)
     }
   }
   m_SliceFileNames = { file };
+}
+
+bool
+CTVolumeReader::ExamineVolumePackage()
+{
+  namespace fs = std::filesystem;
+  using Json = nlohmann::json;
+  const fs::path given(m_FileName);
+  auto           readMeta = [](const fs::path & directory, Json & meta) {
+    std::ifstream in(directory / "meta.json");
+    meta = in ? Json::parse(in, nullptr, false) : Json();
+    return !meta.is_discarded() && meta.is_object() && meta.contains("voxelsize");
+  };
+  // The volume directory: the one given, or in a package the one asked for by
+  // SeriesIdentifier (directory name, uuid or name), else the one with the most slices.
+  fs::path volume;
+  Json     meta;
+  if (readMeta(given, meta))
+  {
+    volume = given;
+  }
+  else if (fs::is_regular_file(given / "config.json") && fs::is_directory(given / "volumes"))
+  {
+    std::vector<std::pair<fs::path, Json>> volumes;
+    for (const auto & entry : fs::directory_iterator(given / "volumes"))
+    {
+      Json candidate;
+      if (entry.is_directory() && readMeta(entry.path(), candidate))
+      {
+        volumes.emplace_back(entry.path(), candidate);
+      }
+    }
+    if (volumes.empty())
+    {
+      throw std::runtime_error(m_FileName + " is a volume package without volumes (no volumes/*/meta.json)");
+    }
+    std::sort(volumes.begin(), volumes.end(), [](const auto & a, const auto & b) { return a.first < b.first; });
+    auto describe = [](const std::pair<fs::path, Json> & v) {
+      return v.first.filename().string() + " (" + v.second.value("name", std::string()) + ", " +
+             std::to_string(v.second.value("slices", 0)) + " slices)";
+    };
+    const std::pair<fs::path, Json> * chosen = nullptr;
+    if (!m_SeriesIdentifier.empty())
+    {
+      for (const auto & v : volumes)
+      {
+        if (v.first.filename() == m_SeriesIdentifier || v.second.value("uuid", std::string()) == m_SeriesIdentifier ||
+            v.second.value("name", std::string()) == m_SeriesIdentifier)
+        {
+          chosen = &v;
+        }
+      }
+      if (chosen == nullptr)
+      {
+        std::string names;
+        for (const auto & v : volumes)
+        {
+          names += (names.empty() ? "" : ", ") + describe(v);
+        }
+        throw std::runtime_error("no volume " + m_SeriesIdentifier + " in " + m_FileName + "; it holds " + names);
+      }
+    }
+    else
+    {
+      chosen = &*std::max_element(volumes.begin(), volumes.end(), [](const auto & a, const auto & b) {
+        return a.second.value("slices", 0) < b.second.value("slices", 0);
+      });
+      if (volumes.size() > 1)
+      {
+        std::string others;
+        for (const auto & v : volumes)
+        {
+          others += &v == chosen ? "" : (others.empty() ? "" : ", ") + describe(v);
+        }
+        m_Warnings.push_back("the volume package holds " + std::to_string(volumes.size()) + " volumes: read " +
+                             describe(*chosen) + " (the most slices); others: " + others);
+      }
+    }
+    volume = chosen->first;
+    meta = chosen->second;
+  }
+  else
+  {
+    return false;
+  }
+  const double voxel = meta["voxelsize"].is_number() ? meta["voxelsize"].get<double>() : 0.0;
+  if (!(voxel > 0.0) || !std::isfinite(voxel))
+  {
+    throw std::runtime_error((volume / "meta.json").string() + ": voxelsize must be a positive number (micrometres)");
+  }
+  std::vector<std::string> slices;
+  for (const auto & entry : fs::directory_iterator(volume))
+  {
+    if (entry.is_regular_file() && HasTiffExtension(entry.path()))
+    {
+      slices.push_back(entry.path().string());
+    }
+  }
+  if (slices.empty())
+  {
+    throw std::runtime_error(volume.string() + " holds meta.json but no TIFF slices");
+  }
+  const auto expected = meta.value("slices", 0L);
+  if (expected > 0 && static_cast<size_t>(expected) != slices.size())
+  {
+    throw std::runtime_error(volume.string() + " holds " + std::to_string(slices.size()) +
+                             " TIFF slices, its meta.json " + std::to_string(expected));
+  }
+  this->ExamineSliceStack(std::move(slices));
+  // The voxel size is the package's (micrometres), not the 1 mm a bare stack gets.
+  m_Warnings.erase(std::remove_if(m_Warnings.begin(),
+                                  m_Warnings.end(),
+                                  [](const std::string & w) { return w.rfind("no voxel size given", 0) == 0; }),
+                   m_Warnings.end());
+  m_GeometrySpacing.Fill(voxel * 1e-3);
+  m_InputKind = "volume-cartographer volume";
+  return true;
 }
 
 void
