@@ -16,6 +16,7 @@ itk_module(VirtualUnwrapping
     ITKIONRRD
     ITKIOMeta
     ITKIONIFTI
+    ITKIOHDF5
     ITKIOPNG
     ITKIOMeshBase
     ITKIOMeshVTK

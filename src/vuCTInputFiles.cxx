@@ -168,7 +168,10 @@ HasNonDicomImageExtension(const fs::path & path)
                                   ".jpg",
                                   ".jpeg",
                                   ".bmp",
-                                  ".vtk" })
+                                  ".vtk",
+                                  ".h5",
+                                  ".hdf5",
+                                  ".hdf" })
   {
     const std::string e(extension);
     if (name.size() > e.size() && name.compare(name.size() - e.size(), e.size(), e) == 0)

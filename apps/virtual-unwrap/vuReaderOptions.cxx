@@ -30,8 +30,9 @@ AddReaderOptions(CLI::App & command, ReaderOptions & options)
 {
   command.add_option("--series",
                      options.Series,
-                     "DICOM series to read: SeriesInstanceUID or series number (default: the series with the most "
-                     "slices)");
+                     "DICOM series to read: SeriesInstanceUID or series number; in a volume-cartographer "
+                     ".volpkg, the volume's directory name, uuid or name (default: the series or volume with the "
+                     "most slices)");
   command
     .add_option("--spacing",
                 options.Spacing,

@@ -15,11 +15,13 @@
  *  limitations under the License.
  *
  *=========================================================================*/
-// CTVolumeReader on volume-cartographer volume packages (NAME.volpkg: config.json,
-// volumes/ID/meta.json beside the TIFF slices 00000.tif ...), written here with sizes,
-// voxel sizes and slice counts drawn at run time.
+// CTVolumeReader on the formats scroll scans come in besides DICOM and TIFF stacks:
+// volume-cartographer volume packages (NAME.volpkg: config.json, volumes/ID/meta.json
+// beside the TIFF slices 00000.tif ...) and HDF5 volumes (ITK's HDF5 IO), written here
+// with sizes, voxel sizes, origins and slice counts drawn at run time.
 #include "itkCTVolumeReader.h"
 #include "itkImageFileWriter.h"
+#include "itkImageRegionConstIterator.h"
 #include "itkImageRegionConstIteratorWithIndex.h"
 #include "itkImageRegionIteratorWithIndex.h"
 
@@ -222,4 +224,73 @@ TEST_F(VolumePackage, AMissingSliceOrVoxelSizeIsRefused)
     EXPECT_NE(std::string(e.GetDescription()).find("voxelsize must be a positive number"), std::string::npos)
       << e.GetDescription();
   }
+}
+
+TEST(CTVolumeReaderHDF5, AnHdf5VolumeIsReadWithItsGeometryAndARegionOfInterest)
+{
+  const unsigned seed = std::random_device{}();
+  std::cout << "HDF5 volume drawn with seed " << seed << std::endl;
+  std::mt19937 random(seed);
+  auto uniform = [&](double low, double high) { return std::uniform_real_distribution<double>(low, high)(random); };
+  using StoredType = itk::Image<int16_t, 3>;
+  auto volume = StoredType::New();
+  volume->SetRegions(StoredType::SizeType{ { static_cast<itk::SizeValueType>(uniform(6, 30)),
+                                             static_cast<itk::SizeValueType>(uniform(6, 30)),
+                                             static_cast<itk::SizeValueType>(uniform(6, 30)) } });
+  StoredType::SpacingType spacing;
+  StoredType::PointType   origin;
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    spacing[d] = uniform(0.005, 0.5);
+    origin[d] = uniform(-50.0, 50.0);
+  }
+  volume->SetSpacing(spacing);
+  volume->SetOrigin(origin);
+  volume->Allocate();
+  for (itk::ImageRegionIteratorWithIndex<StoredType> it(volume, volume->GetBufferedRegion()); !it.IsAtEnd(); ++it)
+  {
+    const auto i = it.GetIndex();
+    it.Set(static_cast<int16_t>((13 * i[0] + 31 * i[1] + 97 * i[2]) % 4000 - 1000));
+  }
+  const fs::path directory = fs::path(VU_BINARY_DIR) / "Testing" / "HDF5";
+  fs::create_directories(directory);
+  const fs::path file = directory / (std::to_string(seed) + ".h5");
+  auto           writer = itk::ImageFileWriter<StoredType>::New();
+  writer->SetInput(volume);
+  writer->SetFileName(file.string());
+  writer->Update();
+
+  const auto                      size = volume->GetLargestPossibleRegion().GetSize();
+  itk::CTVolumeReader::RegionType roi;
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    roi.SetIndex(d, static_cast<long>(size[d] / 4));
+    roi.SetSize(d, size[d] / 2);
+  }
+  for (const bool useRoi : { false, true })
+  {
+    auto reader = itk::CTVolumeReader::New();
+    reader->SetFileName(file.string());
+    reader->SetRegionOfInterest(roi);
+    reader->SetUseRegionOfInterest(useRoi);
+    reader->Update();
+    const auto * image = reader->GetOutput();
+    const auto   region = useRoi ? roi : volume->GetLargestPossibleRegion();
+    EXPECT_EQ(image->GetLargestPossibleRegion().GetSize(), region.GetSize());
+    EXPECT_EQ(std::string(reader->GetPixelType()), "int16");
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      EXPECT_NEAR(image->GetSpacing()[d], spacing[d], 1e-9);
+      EXPECT_NEAR(image->GetOrigin()[d], origin[d] + region.GetIndex(d) * spacing[d], 1e-6);
+    }
+    size_t                                                              bad = 0;
+    itk::ImageRegionConstIterator<StoredType>                           expected(volume, region);
+    itk::ImageRegionConstIterator<itk::CTVolumeReader::OutputImageType> it(image, image->GetLargestPossibleRegion());
+    for (; !it.IsAtEnd(); ++it, ++expected)
+    {
+      bad += it.Get() != static_cast<float>(expected.Get()) ? 1 : 0;
+    }
+    EXPECT_EQ(bad, 0u);
+  }
+  fs::remove(file);
 }
