@@ -29,7 +29,8 @@
 namespace itk {
 /** \class CTVolumeWriter
  * \brief Writes a CT volume in Hounsfield units the way scanners and archives deliver
- * them: a DICOM CT series, a 16-bit TIFF stack, or a single MetaImage / NRRD file.
+ * them: a DICOM CT series, a 16-bit TIFF stack, a single MetaImage / NRRD file, or an
+ * OME-Zarr store.
  *
  * Formats (Format):
  * - Dicom: FileName is a directory; one CT Image Storage file per slice, IMnnnnn.dcm,
@@ -45,6 +46,9 @@ namespace itk {
  *   the reader (the phantom tool records it in its JSON);
  * - MetaImage (.mha) and Nrrd (.nrrd): FileName is the file; int16 HU, zlib-compressed,
  *   with origin, spacing and direction.
+ * - Zarr (.zarr): FileName is the store; an OME-Zarr image (itk::ZarrImageIO), int16 HU
+ *   in 64^3 chunks compressed by blosc (zstd), with origin and spacing (the direction must
+ *   be the identity).
  *
  * A DICOM series can be written the way a hospital CT delivers head and spine scans, so
  * that readers are tested against a known volume:
@@ -87,13 +91,14 @@ public:
     Dicom,
     Tiff,
     MetaImage,
-    Nrrd
+    Nrrd,
+    Zarr
   };
 
   itkNewMacro(Self);
   itkTypeMacro(CTVolumeWriter, Object);
 
-  /** "dicom", "tiff", "mha" or "nrrd"; throws on anything else. */
+  /** "dicom", "tiff", "mha", "nrrd" or "zarr"; throws on anything else. */
   static FormatType
   FormatFromString(const std::string & name);
   static const char *

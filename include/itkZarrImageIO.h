@@ -54,7 +54,8 @@ namespace itk {
  * GetNumberOfChunksRead() counts the chunk files opened by the last Read(): a region read
  * touches only the chunks it overlaps.
  *
- * Writing is not supported. References: Zarr storage specification v2
+ * Writing (a FileName ending in ".zarr") makes an OME-Zarr image, region by region if the
+ * writer streams. References: Zarr storage specification v2
  * (https://zarr.readthedocs.io/en/stable/spec/v2.html); OME-NGFF 0.4
  * (https://ngff.openmicroscopy.org/0.4/).
  * \ingroup VirtualUnwrapping
@@ -99,18 +100,34 @@ public:
   void
   Read(void * buffer) override;
 
+  /** A name ending in ".zarr": written as an OME-Zarr image (one full-resolution dataset
+   * "0", the voxel size and origin as its scale and translation in millimetres). */
   bool
-  CanWriteFile(const char *) override
+  CanWriteFile(const char * fileName) override;
+
+  /** Regions of the image may be written one after the other (ImageFileWriter's stream
+   * divisions): a chunk that a region covers in part is merged with what the store holds. */
+  bool
+  CanStreamWrite() override
   {
-    return false;
+    return true;
   }
 
+  /** Written with the first region by Write(). */
   void
   WriteImageInformation() override
   {}
 
+  /** Writes the IORegion from the buffer, chunk by chunk: blosc (zstd, level 3, byte
+   * shuffle) when UseCompression is on, raw chunks otherwise. A direction other than the
+   * identity is refused (OME-Zarr has no rotation), as is a path that exists and is not a
+   * Zarr store. */
   void
-  Write(const void *) override;
+  Write(const void * buffer) override;
+
+  /** Chunk edge in voxels for writing (each axis, clipped to the image); default 64. */
+  itkSetClampMacro(ChunkEdge, unsigned int, 1, 4096);
+  itkGetConstMacro(ChunkEdge, unsigned int);
 
   /** Chunk files opened by the last Read(). */
   itkGetConstMacro(NumberOfChunksRead, SizeValueType);
@@ -129,6 +146,10 @@ protected:
   PrintSelf(std::ostream & os, Indent indent) const override;
 
 private:
+  struct ChunkRun
+  {
+    size_t Chunk, Buffer, Bytes; // byte offsets in the chunk and the buffer, length
+  };
   enum class Codec
   {
     None,
@@ -138,6 +159,17 @@ private:
 
   void
   ReadChunk(const std::vector<SizeValueType> & chunkIndex, std::vector<char> & data) const;
+  void
+  WriteChunk(const std::vector<SizeValueType> & chunkIndex, const std::vector<char> & data) const;
+  std::string
+  ChunkKey(const std::vector<SizeValueType> & chunkIndex) const;
+  void
+  PrepareStore();
+  // The chunks the IORegion overlaps, each visited with its index and the region's part
+  // of it (copied between the chunk's data and the buffer by `copy`).
+  template <typename TVisit>
+  void
+  ForEachChunkInRegion(TVisit visit) const;
 
   std::string                m_ArrayPath;
   std::vector<SizeValueType> m_Shape;  // Zarr order (slowest first)
@@ -148,6 +180,7 @@ private:
   std::vector<char>          m_FillValue; // one element, in the stored type
   SizeValueType              m_NumberOfChunksRead{ 0 };
   bool                       m_HasGeometry{ false };
+  unsigned int               m_ChunkEdge{ 64 };
 };
 
 /** \class ZarrImageIOFactory

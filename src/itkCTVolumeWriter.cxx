@@ -29,6 +29,7 @@
 #include "itkShiftScaleImageFilter.h"
 #include "itkTIFFImageIO.h"
 #include "itkWindowedSincInterpolateImageFunction.h"
+#include "itkZarrImageIO.h"
 
 #include "gdcmUIDGenerator.h"
 
@@ -91,14 +92,16 @@ MakeDirectory(const std::string & path)
 CTVolumeWriter::FormatType
 CTVolumeWriter::FormatFromString(const std::string & name)
 {
-  for (FormatType format : { FormatType::Dicom, FormatType::Tiff, FormatType::MetaImage, FormatType::Nrrd })
+  for (FormatType format :
+       { FormatType::Dicom, FormatType::Tiff, FormatType::MetaImage, FormatType::Nrrd, FormatType::Zarr })
   {
     if (name == FormatName(format))
     {
       return format;
     }
   }
-  itkGenericExceptionMacro(<< "CTVolumeWriter: unknown format \"" << name << "\" (known: dicom, tiff, mha, nrrd)");
+  itkGenericExceptionMacro(<< "CTVolumeWriter: unknown format \"" << name
+                           << "\" (known: dicom, tiff, mha, nrrd, zarr)");
 }
 
 const char *
@@ -114,6 +117,8 @@ CTVolumeWriter::FormatName(FormatType format)
       return "mha";
     case FormatType::Nrrd:
       return "nrrd";
+    case FormatType::Zarr:
+      return "zarr";
   }
   return "";
 }
@@ -195,6 +200,7 @@ CTVolumeWriter::Write()
       break;
     case FormatType::MetaImage:
     case FormatType::Nrrd:
+    case FormatType::Zarr:
       WriteSingleFile();
       break;
   }
@@ -408,6 +414,10 @@ CTVolumeWriter::WriteSingleFile() const
   if (m_Format == FormatType::MetaImage)
   {
     writer->SetImageIO(MetaImageIO::New());
+  }
+  else if (m_Format == FormatType::Zarr)
+  {
+    writer->SetImageIO(ZarrImageIO::New());
   }
   else
   {

@@ -30,6 +30,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <sstream>
 
 namespace itk {
@@ -359,6 +360,17 @@ ZarrImageIO::GenerateStreamableReadRegionFromRequestedRegion(const ImageIORegion
   return region;
 }
 
+std::string
+ZarrImageIO::ChunkKey(const std::vector<SizeValueType> & chunkIndex) const
+{
+  std::string key;
+  for (size_t a = 0; a < chunkIndex.size(); ++a)
+  {
+    key += (a > 0 ? m_Separator : std::string()) + std::to_string(chunkIndex[a]);
+  }
+  return key;
+}
+
 void
 ZarrImageIO::ReadChunk(const std::vector<SizeValueType> & chunkIndex, std::vector<char> & data) const
 {
@@ -368,13 +380,8 @@ ZarrImageIO::ReadChunk(const std::vector<SizeValueType> & chunkIndex, std::vecto
   {
     elements *= c;
   }
-  const size_t bytes = elements * component;
-  std::string  key;
-  for (size_t a = 0; a < chunkIndex.size(); ++a)
-  {
-    key += (a > 0 ? m_Separator : std::string()) + std::to_string(chunkIndex[a]);
-  }
-  const fs::path file = fs::path(m_ArrayPath) / key;
+  const size_t   bytes = elements * component;
+  const fs::path file = fs::path(m_ArrayPath) / this->ChunkKey(chunkIndex);
   data.resize(bytes);
   std::ifstream in(file, std::ios::binary);
   if (!in)
@@ -443,14 +450,14 @@ ZarrImageIO::ReadChunk(const std::vector<SizeValueType> & chunkIndex, std::vecto
   }
 }
 
+template <typename TVisit>
 void
-ZarrImageIO::Read(void * buffer)
+ZarrImageIO::ForEachChunkInRegion(TVisit visit) const
 {
-  m_NumberOfChunksRead = 0;
   const unsigned int spatial = this->GetNumberOfDimensions();
   const size_t       total = m_Shape.size();
   const size_t       component = this->GetComponentSize();
-  // The region to read along each Zarr axis [first, end), and the chunks it touches.
+  // The region along each Zarr axis [first, end), and the chunks it touches.
   std::vector<SizeValueType> first(total, 0), end(total, 1), chunkFirst(total, 0), chunkEnd(total, 1);
   for (unsigned int d = 0; d < spatial; ++d)
   {
@@ -459,51 +466,50 @@ ZarrImageIO::Read(void * buffer)
     end[a] = first[a] + m_IORegion.GetSize(d);
     if (end[a] > m_Shape[a] || end[a] <= first[a])
     {
-      itkExceptionMacro(<< m_ArrayPath << ": requested region lies outside the array");
+      itkExceptionMacro(<< m_ArrayPath << ": the region lies outside the array");
     }
     chunkFirst[a] = first[a] / m_Chunks[a];
     chunkEnd[a] = (end[a] - 1) / m_Chunks[a] + 1;
   }
-  // Strides of the buffer (ITK order: x fastest) along each Zarr axis.
-  std::vector<SizeValueType> bufferStride(total, 0);
+  // Strides of the buffer (ITK order: x fastest) and of a chunk along each Zarr axis.
+  std::vector<SizeValueType> bufferStride(total, 0), chunkStride(total, 1);
   SizeValueType              stride = 1;
   for (unsigned int d = 0; d < spatial; ++d)
   {
     bufferStride[total - 1 - d] = stride;
     stride *= m_IORegion.GetSize(d);
   }
-  std::vector<SizeValueType> chunkStride(total, 1);
   for (size_t a = total - 1; a-- > 0;)
   {
     chunkStride[a] = chunkStride[a + 1] * m_Chunks[a + 1];
   }
-  auto *                     out = static_cast<char *>(buffer);
-  std::vector<char>          data;
-  std::vector<SizeValueType> chunk(chunkFirst);
   const size_t               last = total - 1;
+  std::vector<SizeValueType> chunk(chunkFirst);
+  std::vector<ChunkRun>      runs;
   for (;;)
   {
-    this->ReadChunk(chunk, data);
-    ++m_NumberOfChunksRead;
-    // The part of this chunk inside the region: runs along the last axis.
+    // The part of this chunk inside the region, as runs along the last axis; whether it
+    // is all of the chunk's part inside the array.
     std::vector<SizeValueType> low(total), high(total);
+    bool                       covered = true;
     for (size_t a = 0; a < total; ++a)
     {
       low[a] = std::max(first[a], chunk[a] * m_Chunks[a]);
       high[a] = std::min(end[a], (chunk[a] + 1) * m_Chunks[a]);
+      covered =
+        covered && low[a] == chunk[a] * m_Chunks[a] && high[a] == std::min(m_Shape[a], (chunk[a] + 1) * m_Chunks[a]);
     }
+    runs.clear();
     std::vector<SizeValueType> at(low);
-    const size_t               run = (high[last] - low[last]) * component;
     for (;;)
     {
-      SizeValueType from = 0, to = 0;
+      SizeValueType inChunk = 0, inBuffer = 0;
       for (size_t a = 0; a < total; ++a)
       {
-        from += (at[a] - chunk[a] * m_Chunks[a]) * chunkStride[a];
-        to += (at[a] - first[a]) * bufferStride[a];
+        inChunk += (at[a] - chunk[a] * m_Chunks[a]) * chunkStride[a];
+        inBuffer += (at[a] - first[a]) * bufferStride[a];
       }
-      std::memcpy(out + to * component, data.data() + from * component, run);
-      // Next run: the axes before the last, odometer-wise.
+      runs.push_back({ inChunk * component, inBuffer * component, (high[last] - low[last]) * component });
       size_t a = last;
       while (a-- > 0)
       {
@@ -518,7 +524,7 @@ ZarrImageIO::Read(void * buffer)
         break;
       }
     }
-    // Next chunk, odometer-wise.
+    visit(chunk, runs, covered);
     size_t a = total;
     while (a-- > 0)
     {
@@ -536,9 +542,180 @@ ZarrImageIO::Read(void * buffer)
 }
 
 void
-ZarrImageIO::Write(const void *)
+ZarrImageIO::Read(void * buffer)
 {
-  itkExceptionMacro(<< "ZarrImageIO does not write");
+  m_NumberOfChunksRead = 0;
+  auto *            out = static_cast<char *>(buffer);
+  std::vector<char> data;
+  this->ForEachChunkInRegion([&](const std::vector<SizeValueType> & chunk, const std::vector<ChunkRun> & runs, bool) {
+    this->ReadChunk(chunk, data);
+    ++m_NumberOfChunksRead;
+    for (const ChunkRun & run : runs)
+    {
+      std::memcpy(out + run.Buffer, data.data() + run.Chunk, run.Bytes);
+    }
+  });
+}
+
+bool
+ZarrImageIO::CanWriteFile(const char * fileName)
+{
+  const std::string name(fileName);
+  return name.size() > 5 && name.compare(name.size() - 5, 5, ".zarr") == 0;
+}
+
+void
+ZarrImageIO::PrepareStore()
+{
+  const unsigned int n = this->GetNumberOfDimensions();
+  if (n < 2 || n > 3 || this->GetNumberOfComponents() != 1)
+  {
+    itkExceptionMacro(<< "ZarrImageIO writes 2D or 3D scalar images, not " << n << "D with "
+                      << this->GetNumberOfComponents() << " components");
+  }
+  for (unsigned int d = 0; d < n; ++d)
+  {
+    for (unsigned int e = 0; e < n; ++e)
+    {
+      if (std::abs(this->GetDirection(d)[e] - (d == e ? 1.0 : 0.0)) > 1e-9)
+      {
+        itkExceptionMacro(<< m_FileName << ": OME-Zarr stores no rotation; the image's direction must be the identity");
+      }
+    }
+  }
+  static const std::map<IOComponentEnum, std::string> types = {
+    { IOComponentEnum::UCHAR, "|u1" }, { IOComponentEnum::CHAR, "|i1" },  { IOComponentEnum::USHORT, "<u2" },
+    { IOComponentEnum::SHORT, "<i2" }, { IOComponentEnum::UINT, "<u4" },  { IOComponentEnum::INT, "<i4" },
+    { IOComponentEnum::FLOAT, "<f4" }, { IOComponentEnum::DOUBLE, "<f8" }
+  };
+  const auto type = types.find(this->GetComponentType());
+  if (type == types.end())
+  {
+    itkExceptionMacro(<< "ZarrImageIO does not write "
+                      << ImageIOBase::GetComponentTypeAsString(this->GetComponentType()) << " voxels");
+  }
+  m_Shape.assign(n, 0);
+  m_Chunks.assign(n, 0);
+  std::vector<double> scale(n), translation(n);
+  for (unsigned int d = 0; d < n; ++d)
+  {
+    const size_t a = n - 1 - d;
+    m_Shape[a] = this->GetDimensions(d);
+    m_Chunks[a] = std::min<SizeValueType>(m_ChunkEdge, m_Shape[a]);
+    scale[a] = this->GetSpacing(d);
+    translation[a] = this->GetOrigin(d);
+  }
+  m_LeadingAxes = 0;
+  m_Separator = ".";
+  m_Codec = this->GetUseCompression() ? Codec::Blosc : Codec::None;
+  m_FillValue.assign(this->GetComponentSize(), 0);
+  const fs::path root(m_FileName);
+  m_ArrayPath = (root / "0").string();
+  m_HasGeometry = true;
+
+  Json array = { { "zarr_format", 2 }, { "shape", m_Shape }, { "chunks", m_Chunks }, { "dtype", type->second },
+                 { "fill_value", 0 },  { "order", "C" },     { "filters", nullptr }, { "dimension_separator", "." } };
+  array["compressor"] =
+    m_Codec == Codec::Blosc
+      ? Json{ { "id", "blosc" }, { "cname", "zstd" }, { "clevel", 3 }, { "shuffle", 1 }, { "blocksize", 0 } }
+      : Json(nullptr);
+  Json axes = Json::array();
+  for (size_t a = 0; a < n; ++a)
+  {
+    axes.push_back({ { "name", std::string(1, "zyx"[3 - n + a]) }, { "type", "space" }, { "unit", "millimeter" } });
+  }
+  Json attributes;
+  attributes["multiscales"] = Json::array(
+    { { { "version", "0.4" },
+        { "axes", axes },
+        { "datasets",
+          Json::array(
+            { { { "path", "0" },
+                { "coordinateTransformations",
+                  Json::array({ { { "type", "scale" }, { "scale", scale } },
+                                { { "type", "translation" }, { "translation", translation } } }) } } }) } } });
+  // A store that already holds this array (an earlier region of the same image) is
+  // continued; another store at the path is replaced; anything else there is refused.
+  Json existing;
+  if (fs::is_regular_file(root / "0" / ".zarray") && ReadJson(root / "0" / ".zarray", existing) && existing == array)
+  {
+    return;
+  }
+  std::error_code error;
+  if (fs::exists(root, error))
+  {
+    const bool store = fs::is_directory(root) && (fs::exists(root / ".zgroup") || fs::exists(root / ".zarray"));
+    if (!store && !(fs::is_directory(root) && fs::is_empty(root)))
+    {
+      itkExceptionMacro(<< m_FileName << " exists and is not a Zarr store: not overwritten");
+    }
+    fs::remove_all(root);
+  }
+  fs::create_directories(root / "0");
+  auto writeJson = [&](const fs::path & file, const Json & json) {
+    const fs::path partial = file.string() + ".partial";
+    std::ofstream(partial) << json.dump(1) << "\n";
+    fs::rename(partial, file);
+  };
+  writeJson(root / ".zgroup", { { "zarr_format", 2 } });
+  writeJson(root / ".zattrs", attributes);
+  writeJson(root / "0" / ".zarray", array);
+}
+
+void
+ZarrImageIO::WriteChunk(const std::vector<SizeValueType> & chunkIndex, const std::vector<char> & data) const
+{
+  const fs::path    file = fs::path(m_ArrayPath) / this->ChunkKey(chunkIndex);
+  std::vector<char> stored;
+  if (m_Codec == Codec::Blosc)
+  {
+    stored.resize(data.size() + BLOSC_MAX_OVERHEAD);
+    const int bytes = blosc_compress_ctx(
+      3, BLOSC_SHUFFLE, this->GetComponentSize(), data.size(), data.data(), stored.data(), stored.size(), "zstd", 0, 1);
+    if (bytes <= 0)
+    {
+      itkExceptionMacro(<< "blosc could not compress the chunk " << file.string());
+    }
+    stored.resize(static_cast<size_t>(bytes));
+  }
+  const std::vector<char> & out = m_Codec == Codec::Blosc ? stored : data;
+  const fs::path            partial = file.string() + ".partial";
+  {
+    std::ofstream stream(partial, std::ios::binary);
+    stream.write(out.data(), static_cast<std::streamsize>(out.size()));
+    if (!stream)
+    {
+      itkExceptionMacro(<< "cannot write the chunk " << partial.string());
+    }
+  }
+  fs::rename(partial, file);
+}
+
+void
+ZarrImageIO::Write(const void * buffer)
+{
+  this->PrepareStore();
+  const auto *      in = static_cast<const char *>(buffer);
+  std::vector<char> data;
+  this->ForEachChunkInRegion(
+    [&](const std::vector<SizeValueType> & chunk, const std::vector<ChunkRun> & runs, bool covered) {
+      if (covered)
+      {
+        data.assign(
+          this->GetComponentSize() *
+            std::accumulate(m_Chunks.begin(), m_Chunks.end(), SizeValueType{ 1 }, std::multiplies<SizeValueType>()),
+          0);
+      }
+      else
+      {
+        this->ReadChunk(chunk, data); // the parts other regions wrote, or the fill value
+      }
+      for (const ChunkRun & run : runs)
+      {
+        std::memcpy(data.data() + run.Chunk, in + run.Buffer, run.Bytes);
+      }
+      this->WriteChunk(chunk, data);
+    });
 }
 
 void

@@ -20,7 +20,9 @@
 // reads that open only the chunks they overlap, and the refusals.
 #include "itkCTVolumeReader.h"
 #include "itkImageFileReader.h"
+#include "itkImageFileWriter.h"
 #include "itkImageRegionConstIteratorWithIndex.h"
+#include "itkImageRegionIteratorWithIndex.h"
 #include "itkZarrImageIO.h"
 
 #include <gtest/gtest.h>
@@ -342,4 +344,115 @@ TEST(ZarrImageIO, DamagedOrUnsupportedStoresAreRefusedWithTheReason)
     EXPECT_NE(std::string(e.GetDescription()).find("little-endian"), std::string::npos) << e.GetDescription();
   }
   fs::remove_all(damaged);
+}
+
+namespace {
+// The value written at (x, y, z) in the written-store test, for a given salt.
+double
+WrittenValue(long x, long y, long z, int salt)
+{
+  return static_cast<double>((7 * x + 13 * y + 29 * z + salt) % 3000);
+}
+
+template <typename TPixel>
+Json
+WriteStore(const std::string & name, bool compressed, std::mt19937 & random)
+{
+  using WrittenType = itk::Image<TPixel, 3>;
+  auto image = WrittenType::New();
+  auto draw = [&](long low, long high) { return std::uniform_int_distribution<long>(low, high)(random); };
+  typename WrittenType::SizeType    size;
+  typename WrittenType::SpacingType spacing;
+  typename WrittenType::PointType   origin;
+  for (unsigned d = 0; d < 3; ++d)
+  {
+    size[d] = static_cast<itk::SizeValueType>(draw(5, 40));
+    spacing[d] = 0.001 * static_cast<double>(draw(5, 400));
+    origin[d] = 0.01 * static_cast<double>(draw(-5000, 5000));
+  }
+  image->SetRegions(size);
+  image->SetSpacing(spacing);
+  image->SetOrigin(origin);
+  image->Allocate();
+  const int salt = static_cast<int>(draw(0, 1000));
+  for (itk::ImageRegionIteratorWithIndex<WrittenType> it(image, image->GetBufferedRegion()); !it.IsAtEnd(); ++it)
+  {
+    const auto i = it.GetIndex();
+    it.Set(static_cast<TPixel>(WrittenValue(i[0], i[1], i[2], salt)));
+  }
+  auto io = itk::ZarrImageIO::New();
+  io->SetChunkEdge(static_cast<unsigned>(draw(3, 16)));
+  auto writer = itk::ImageFileWriter<WrittenType>::New();
+  writer->SetInput(image);
+  writer->SetImageIO(io);
+  writer->SetFileName(StoreDirectory() + "/" + name);
+  writer->SetUseCompression(compressed);
+  // Regions one after the other: chunks cut by a region's edge are merged.
+  writer->SetNumberOfStreamDivisions(static_cast<unsigned>(draw(1, 5)));
+  writer->Update();
+  return { { "name", name },
+           { "salt", salt },
+           { "size_xyz", { size[0], size[1], size[2] } },
+           { "spacing_xyz", { spacing[0], spacing[1], spacing[2] } },
+           { "origin_xyz", { origin[0], origin[1], origin[2] } },
+           { "chunk_edge", io->GetChunkEdge() },
+           { "compressed", compressed },
+           { "streams", writer->GetNumberOfStreamDivisions() } };
+}
+} // namespace
+
+TEST(ZarrImageIO, WrittenStoresReadBackVoxelByVoxelWithTheirGeometry)
+{
+  const unsigned seed = std::random_device{}();
+  std::mt19937   random(seed);
+  std::cout << "written stores drawn with seed " << seed << std::endl;
+  fs::create_directories(StoreDirectory());
+  Json written = Json::array();
+  written.push_back(WriteStore<uint16_t>("written-u16.zarr", true, random));
+  written.push_back(WriteStore<float>("written-f32.zarr", false, random));
+  written.push_back(WriteStore<int16_t>("written-i16.zarr", true, random));
+  for (const Json & store : written)
+  {
+    const std::string path = StoreDirectory() + "/" + store["name"].get<std::string>();
+    auto              io = itk::ZarrImageIO::New();
+    ASSERT_TRUE(io->CanReadFile(path.c_str())) << path;
+    const ImageType::Pointer image = ReadRegion(path, nullptr, io);
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      EXPECT_EQ(image->GetLargestPossibleRegion().GetSize(d), store["size_xyz"][d].get<itk::SizeValueType>());
+      EXPECT_NEAR(image->GetSpacing()[d], store["spacing_xyz"][d].get<double>(), 1e-12);
+      EXPECT_NEAR(image->GetOrigin()[d], store["origin_xyz"][d].get<double>(), 1e-12);
+    }
+    size_t bad = 0;
+    for (itk::ImageRegionConstIteratorWithIndex<ImageType> it(image, image->GetBufferedRegion()); !it.IsAtEnd(); ++it)
+    {
+      const auto i = it.GetIndex();
+      bad += it.Get() != WrittenValue(i[0], i[1], i[2], store["salt"].get<int>()) ? 1 : 0;
+    }
+    EXPECT_EQ(bad, 0u) << store.dump();
+  }
+  // For test/zarr_check_written.py: python3-zarr reads them too.
+  std::ofstream(StoreDirectory() + "/written.json") << written.dump(1);
+
+  // A path that is not a Zarr store is never overwritten; a rotated image is refused.
+  const std::string occupied = StoreDirectory() + "/occupied.zarr";
+  std::ofstream(occupied) << "not a store\n";
+  auto image = ImageType::New();
+  image->SetRegions(ImageType::SizeType{ { 4, 4, 4 } });
+  image->Allocate(true);
+  auto writer = itk::ImageFileWriter<ImageType>::New();
+  writer->SetInput(image);
+  writer->SetImageIO(itk::ZarrImageIO::New());
+  writer->SetFileName(occupied);
+  EXPECT_THROW(writer->Update(), itk::ExceptionObject);
+  std::ifstream kept(occupied);
+  std::string   line;
+  std::getline(kept, line);
+  EXPECT_EQ(line, "not a store");
+  ImageType::DirectionType rotated;
+  rotated.Fill(0.0);
+  rotated[0][1] = rotated[1][0] = rotated[2][2] = 1.0;
+  image->SetDirection(rotated);
+  writer->SetFileName(StoreDirectory() + "/rotated.zarr");
+  EXPECT_THROW(writer->Update(), itk::ExceptionObject);
 }

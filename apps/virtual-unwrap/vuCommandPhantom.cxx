@@ -518,7 +518,8 @@ RegisterPhantomCommand(CLI::App & app)
   command->add_option("PRESET", options.Preset, "preset to start from (options below override it)")->required();
   command->add_option("-o,--output", options.Output, "output directory (created; replaced only with --force)")
     ->required();
-  command->add_option("--format", options.Format, "volume format: dicom, tiff, mha or nrrd")->capture_default_str();
+  command->add_option("--format", options.Format, "volume format: dicom, tiff, mha, nrrd or zarr (OME-Zarr)")
+    ->capture_default_str();
   command->add_flag("--force", options.Force, "replace an existing, non-empty output directory");
   command->add_option(
     "--mesh-spacing", options.MeshSpacing, "grid spacing of the ground-truth OBJ meshes, mm (default: the voxel size)");
