@@ -634,11 +634,18 @@ ZarrImageIO::PrepareStore()
                 { "coordinateTransformations",
                   Json::array({ { { "type", "scale" }, { "scale", scale } },
                                 { { "type", "translation" }, { "translation", translation } } }) } } }) } } });
+  auto writeJson = [&](const fs::path & file, const Json & json) {
+    const fs::path partial = file.string() + ".partial";
+    std::ofstream(partial) << json.dump(1) << "\n";
+    fs::rename(partial, file);
+  };
   // A store that already holds this array (an earlier region of the same image) is
-  // continued; another store at the path is replaced; anything else there is refused.
+  // continued, its geometry written again; another store at the path is replaced;
+  // anything else there is refused.
   Json existing;
   if (fs::is_regular_file(root / "0" / ".zarray") && ReadJson(root / "0" / ".zarray", existing) && existing == array)
   {
+    writeJson(root / ".zattrs", attributes);
     return;
   }
   std::error_code error;
@@ -652,11 +659,6 @@ ZarrImageIO::PrepareStore()
     fs::remove_all(root);
   }
   fs::create_directories(root / "0");
-  auto writeJson = [&](const fs::path & file, const Json & json) {
-    const fs::path partial = file.string() + ".partial";
-    std::ofstream(partial) << json.dump(1) << "\n";
-    fs::rename(partial, file);
-  };
   writeJson(root / ".zgroup", { { "zarr_format", 2 } });
   writeJson(root / ".zattrs", attributes);
   writeJson(root / "0" / ".zarray", array);

@@ -19,6 +19,8 @@
 // types and compressors drawn at run time): every voxel, the OME-Zarr geometry, region
 // reads that open only the chunks they overlap, and the refusals.
 #include "itkCTVolumeReader.h"
+#include "itkCastImageFilter.h"
+#include "itkCommand.h"
 #include "itkImageFileReader.h"
 #include "itkImageFileWriter.h"
 #include "itkImageRegionConstIteratorWithIndex.h"
@@ -382,14 +384,25 @@ WriteStore(const std::string & name, bool compressed, std::mt19937 & random)
   }
   auto io = itk::ZarrImageIO::New();
   io->SetChunkEdge(static_cast<unsigned>(draw(3, 16)));
+  // Through a filter that computes only the region asked of it, so that the writer streams
+  // (given a whole image it writes it at once).
+  auto pass = itk::CastImageFilter<WrittenType, WrittenType>::New();
+  pass->SetInput(image);
   auto writer = itk::ImageFileWriter<WrittenType>::New();
-  writer->SetInput(image);
+  writer->SetInput(pass->GetOutput());
   writer->SetImageIO(io);
+  size_t progress = 0;
+  auto   count = itk::CStyleCommand::New();
+  count->SetClientData(&progress);
+  count->SetCallback([](itk::Object *, const itk::EventObject &, void * data) { ++*static_cast<size_t *>(data); });
+  writer->AddObserver(itk::ProgressEvent(), count);
   writer->SetFileName(StoreDirectory() + "/" + name);
   writer->SetUseCompression(compressed);
   // Regions one after the other: chunks cut by a region's edge are merged.
   writer->SetNumberOfStreamDivisions(static_cast<unsigned>(draw(1, 5)));
   writer->Update();
+  // One progress event before the first region and one after each.
+  EXPECT_EQ(progress, writer->GetNumberOfStreamDivisions() + 1) << name;
   return { { "name", name },
            { "salt", salt },
            { "size_xyz", { size[0], size[1], size[2] } },
@@ -433,6 +446,31 @@ TEST(ZarrImageIO, WrittenStoresReadBackVoxelByVoxelWithTheirGeometry)
   }
   // For test/zarr_check_written.py: python3-zarr reads them too.
   std::ofstream(StoreDirectory() + "/written.json") << written.dump(1);
+
+  // The same image again with another origin and spacing: the store's geometry follows.
+  {
+    fs::remove_all(StoreDirectory() + "/again.zarr");
+    auto again = ImageType::New();
+    again->SetRegions(ImageType::SizeType{ { 6, 5, 4 } });
+    again->Allocate(true);
+    auto rewrite = itk::ImageFileWriter<ImageType>::New();
+    rewrite->SetInput(again);
+    rewrite->SetImageIO(itk::ZarrImageIO::New());
+    rewrite->SetFileName(StoreDirectory() + "/again.zarr");
+    rewrite->Update();
+    again->SetOrigin(ImageType::PointType{ { { 1.5, -2.0, 3.0 } } });
+    ImageType::SpacingType spacing;
+    spacing[0] = 0.5;
+    spacing[1] = 0.25;
+    spacing[2] = 2.0;
+    again->SetSpacing(spacing);
+    rewrite->Modified();
+    rewrite->Update();
+    auto                     io = itk::ZarrImageIO::New();
+    const ImageType::Pointer back = ReadRegion(StoreDirectory() + "/again.zarr", nullptr, io);
+    EXPECT_EQ(back->GetOrigin(), again->GetOrigin());
+    EXPECT_EQ(back->GetSpacing(), again->GetSpacing());
+  }
 
   // A path that is not a Zarr store is never overwritten; a rotated image is refused.
   const std::string occupied = StoreDirectory() + "/occupied.zarr";
