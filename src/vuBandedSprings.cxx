@@ -35,20 +35,85 @@ namespace vu {
 namespace {
 // Adds sign * source[0..count) to the ring slots of particles first, first + 1, ...,
 // in contiguous runs (the ring wraps at most once per call).
-inline void
-AddToRing(float * ring, size_t mask, size_t first, const float * source, size_t count, float sign)
+VU_VECTOR_CLONES void
+AddToRing(float * __restrict ring, size_t mask, size_t first, const float * __restrict source, size_t count, float sign)
 {
   size_t slot = first & mask;
   while (count > 0)
   {
     const size_t run = std::min(count, mask + 1 - slot);
+    float * __restrict to = ring + slot;
+    const float * __restrict from = source;
     for (size_t k = 0; k < run; ++k)
     {
-      ring[slot + k] += sign * source[k];
+      to[k] += sign * from[k];
     }
     source += run;
     count -= run;
     slot = 0;
+  }
+}
+
+// Moves the ring slots of particles first .. first + count - 1 to destination and clears
+// them.
+void
+TakeFromRing(float * ring, size_t mask, size_t first, float * destination, size_t count)
+{
+  size_t slot = first & mask;
+  while (count > 0)
+  {
+    const size_t run = std::min(count, mask + 1 - slot);
+    std::copy(ring + slot, ring + slot + run, destination);
+    std::fill(ring + slot, ring + slot + run, 0.0F);
+    destination += run;
+    count -= run;
+    slot = 0;
+  }
+}
+
+// The Euler update of count particles from their forces, every particle the same
+// arithmetic so that it vectorises: a = F / m + g - c v; symplectic: v' = v + h a,
+// x' = x + h v'; explicit: x' = x + h v, v' = v + h a. Locked particles keep x, at rest.
+template <bool Symplectic>
+VU_VECTOR_CLONES void
+IntegrateBlock(const float * __restrict x0,
+               const float * __restrict x1,
+               const float * __restrict x2,
+               float * __restrict xn0,
+               float * __restrict xn1,
+               float * __restrict xn2,
+               float * __restrict v0,
+               float * __restrict v1,
+               float * __restrict v2,
+               const float * __restrict f0,
+               const float * __restrict f1,
+               const float * __restrict f2,
+               const float * __restrict inverseMass,
+               const uint8_t * __restrict locked,
+               size_t count,
+               float  h,
+               float  c,
+               float  g0,
+               float  g1,
+               float  g2)
+{
+  for (size_t k = 0; k < count; ++k)
+  {
+    // A locked particle moves with a time step of 0 and keeps a velocity of 0 (factors,
+    // not a branch, so that the loop vectorises; exact for every other particle).
+    const float keep = 1.0F - static_cast<float>(locked[k]); // locked is 0 or 1
+    const float hk = keep * h;
+    const float w = inverseMass[k];
+    const float a0 = f0[k] * w + g0 - c * v0[k];
+    const float a1 = f1[k] * w + g1 - c * v1[k];
+    const float a2 = f2[k] * w + g2 - c * v2[k];
+    const float u0 = v0[k] + h * a0, u1 = v1[k] + h * a1, u2 = v2[k] + h * a2;
+    xn0[k] = x0[k] + hk * (Symplectic ? u0 : v0[k]);
+    xn1[k] = x1[k] + hk * (Symplectic ? u1 : v1[k]);
+    xn2[k] = x2[k] + hk * (Symplectic ? u2 : v2[k]);
+    v0[k] = keep * u0;
+    v1[k] = keep * u1;
+    v2[k] = keep * u2;
   }
 }
 
@@ -245,20 +310,13 @@ BandedSprings::StepRange(const float * const x[3],
       continue;
     }
     // Every spring of the block's particles is in: integrate them.
+    const size_t count = blockEnd - s;
+    for (int d = 0; d < 3; ++d)
+    {
+      TakeFromRing(ring[d], mask, s, f[d], count);
+    }
     for (size_t p = s; p < blockEnd; ++p)
     {
-      const size_t slot = p & mask;
-      float        force[3] = { ring[0][slot], ring[1][slot], ring[2][slot] };
-      ring[0][slot] = ring[1][slot] = ring[2][slot] = 0.0F;
-      if (locked[p])
-      {
-        for (int d = 0; d < 3; ++d)
-        {
-          v[d][p] = 0.0F;
-          xNext[d][p] = x[d][p];
-        }
-        continue;
-      }
       for (uint64_t e = m_ExtraStart[p]; e < m_ExtraStart[p + 1]; ++e)
       {
         const Extra & nb = m_Extra[e];
@@ -267,49 +325,57 @@ BandedSprings::StepRange(const float * const x[3],
         const float   scale = len > 0.0F ? nb.stiffness * (1.0F - nb.restLength / len) : 0.0F;
         for (int k = 0; k < 3; ++k)
         {
-          force[k] += scale * d[k];
+          f[k][p - s] += scale * d[k];
         }
       }
-      float xn[3], vn[3];
-      for (int d = 0; d < 3; ++d)
+    }
+    (settings.symplectic ? IntegrateBlock<true> : IntegrateBlock<false>)(x[0] + s,
+                                                                         x[1] + s,
+                                                                         x[2] + s,
+                                                                         xNext[0] + s,
+                                                                         xNext[1] + s,
+                                                                         xNext[2] + s,
+                                                                         v[0] + s,
+                                                                         v[1] + s,
+                                                                         v[2] + s,
+                                                                         f[0],
+                                                                         f[1],
+                                                                         f[2],
+                                                                         inverseMass + s,
+                                                                         locked + s,
+                                                                         count,
+                                                                         h,
+                                                                         c,
+                                                                         settings.gravity[0],
+                                                                         settings.gravity[1],
+                                                                         settings.gravity[2]);
+    if (!settings.hasPlane)
+    {
+      continue;
+    }
+    // The collision plane as in the double-precision step: pushed back onto it, and
+    // V - (1 + k_r)(V . N) N, or at rest below the resting speed.
+    const float * N = settings.planeNormal;
+    for (size_t p = s; p < blockEnd; ++p)
+    {
+      if (locked[p])
       {
-        const float a = force[d] * inverseMass[p] + settings.gravity[d] - c * v[d][p];
-        if (settings.symplectic)
-        {
-          vn[d] = v[d][p] + h * a;
-          xn[d] = x[d][p] + h * vn[d];
-        }
-        else
-        {
-          xn[d] = x[d][p] + h * v[d][p];
-          vn[d] = v[d][p] + h * a;
-        }
+        continue;
       }
-      if (settings.hasPlane)
+      const float depth = (xNext[0][p] - settings.planePoint[0]) * N[0] +
+                          (xNext[1][p] - settings.planePoint[1]) * N[1] + (xNext[2][p] - settings.planePoint[2]) * N[2];
+      if (depth < 0.0F)
       {
-        // The collision plane as in the double-precision step: pushed back onto it, and
-        // V - (1 + k_r)(V . N) N, or at rest below the resting speed.
-        const float * N = settings.planeNormal;
-        const float   depth = (xn[0] - settings.planePoint[0]) * N[0] + (xn[1] - settings.planePoint[1]) * N[1] +
-                            (xn[2] - settings.planePoint[2]) * N[2];
-        if (depth < 0.0F)
+        const float vNormal = v[0][p] * N[0] + v[1][p] * N[1] + v[2][p] * N[2];
+        const float rebound = -settings.restitution * vNormal <= settings.restingSpeed ? 0.0F : settings.restitution;
+        for (int d = 0; d < 3; ++d)
         {
-          const float vNormal = vn[0] * N[0] + vn[1] * N[1] + vn[2] * N[2];
-          const float rebound = -settings.restitution * vNormal <= settings.restingSpeed ? 0.0F : settings.restitution;
-          for (int d = 0; d < 3; ++d)
+          xNext[d][p] -= depth * N[d];
+          if (vNormal < 0.0F)
           {
-            xn[d] -= depth * N[d];
-            if (vNormal < 0.0F)
-            {
-              vn[d] -= (1.0F + rebound) * vNormal * N[d];
-            }
+            v[d][p] -= (1.0F + rebound) * vNormal * N[d];
           }
         }
-      }
-      for (int d = 0; d < 3; ++d)
-      {
-        xNext[d][p] = xn[d];
-        v[d][p] = vn[d];
       }
     }
   }

@@ -76,8 +76,8 @@ public:
 
   /** One explicit (symplectic) Euler step of particles [begin, end): reads the positions
    * x of all particles, writes the new positions of the range to xNext and updates the
-   * range's velocities v in place. Locked particles keep their position, at rest. begin
-   * is a multiple of BlockSize. */
+   * range's velocities v in place. Locked particles (locked 1, others 0) keep their
+   * position, at rest. begin is a multiple of BlockSize. */
   void
   StepRange(const float * const x[3],
             float * const       xNext[3],
