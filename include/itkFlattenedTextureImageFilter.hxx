@@ -233,56 +233,65 @@ FlattenedTextureImageFilter<TImage, TOutputImage, TMesh>::GenerateData()
   // columns (along the sheet): a tile's samples lie in a small block of the volume, which
   // its neighbouring rows read again while it is in the cache. Row by row, a long sheet's
   // row reads more of the volume than the cache holds before the next row comes back to
-  // it, and every sample waits for memory.
+  // it, and every sample waits for memory. Each thread takes the next tile as it finishes
+  // one: the sheet covers the texture unevenly (a roll's turns differ in length), and
+  // fixed shares left one thread sampling alone for a fifth of the stage.
   constexpr SizeValueType    tileRows = 8;
   constexpr SizeValueType    tileColumns = 256;
   const SizeValueType        rowTiles = (rows + tileRows - 1) / tileRows;
   const SizeValueType        columnTiles = (columns + tileColumns - 1) / tileColumns;
   std::atomic<SizeValueType> clamped{ 0 };
   std::atomic<bool>          aborted{ false };
+  std::atomic<SizeValueType> nextTile{ 0 };
   ProgressTransformer        progress(mapIsCurrent ? 0.0f : mapShare, 1.0f, this);
-  this->GetMultiThreader()->ParallelizeArray(
-    0,
-    rowTiles * columnTiles,
-    [&](SizeValueType tile) {
-      if (aborted || this->GetAbortGenerateData())
+  const auto                 sampleTile = [&](SizeValueType tile) {
+    std::vector<float>  samples(numberOfLayers);
+    SizeValueType       tileClamped = 0;
+    const SizeValueType firstRow = (tile / columnTiles) * tileRows;
+    const SizeValueType firstColumn = (tile % columnTiles) * tileColumns;
+    const SizeValueType lastColumn = std::min(columns, firstColumn + tileColumns);
+    for (SizeValueType row = firstRow; row < std::min(rows, firstRow + tileRows); ++row)
+    {
+      for (SizeValueType pixel = row * columns + firstColumn; pixel < row * columns + lastColumn; ++pixel)
       {
-        aborted = true;
-        return;
-      }
-      std::vector<float>  samples(numberOfLayers);
-      SizeValueType       tileClamped = 0;
-      const SizeValueType firstRow = (tile / columnTiles) * tileRows;
-      const SizeValueType firstColumn = (tile % columnTiles) * tileColumns;
-      const SizeValueType lastColumn = std::min(columns, firstColumn + tileColumns);
-      for (SizeValueType row = firstRow; row < std::min(rows, firstRow + tileRows); ++row)
-      {
-        for (SizeValueType pixel = row * columns + firstColumn; pixel < row * columns + lastColumn; ++pixel)
+        if (m_PixelMap.Triangle[pixel] < 0)
         {
-          if (m_PixelMap.Triangle[pixel] < 0)
-          {
-            texture[pixel] = nan;
-            mask[pixel] = 0;
-            for (unsigned int k = 0; k < numberOfLayers; ++k)
-            {
-              stack[k * sliceSize + pixel] = nan;
-            }
-            continue;
-          }
-          const float * p = &m_PixelMap.Positions[3 * pixel];
-          const float * n = &m_PixelMap.Normals[3 * pixel];
-          const double  point[3] = { p[0], p[1], p[2] };
-          const double  normal[3] = { n[0], n[1], n[2] };
-          tileClamped += sampler.Sample(point, normal, samples.data());
+          texture[pixel] = nan;
+          mask[pixel] = 0;
           for (unsigned int k = 0; k < numberOfLayers; ++k)
           {
-            stack[k * sliceSize + pixel] = static_cast<OutputPixelType>(samples[k]);
+            stack[k * sliceSize + pixel] = nan;
           }
-          texture[pixel] = static_cast<OutputPixelType>(layers.Combine(samples.data()));
-          mask[pixel] = 1;
+          continue;
         }
+        const float * p = &m_PixelMap.Positions[3 * pixel];
+        const float * n = &m_PixelMap.Normals[3 * pixel];
+        const double  point[3] = { p[0], p[1], p[2] };
+        const double  normal[3] = { n[0], n[1], n[2] };
+        tileClamped += sampler.Sample(point, normal, samples.data());
+        for (unsigned int k = 0; k < numberOfLayers; ++k)
+        {
+          stack[k * sliceSize + pixel] = static_cast<OutputPixelType>(samples[k]);
+        }
+        texture[pixel] = static_cast<OutputPixelType>(layers.Combine(samples.data()));
+        mask[pixel] = 1;
       }
-      clamped += tileClamped;
+    }
+    clamped += tileClamped;
+  };
+  this->GetMultiThreader()->ParallelizeArray(
+    0,
+    std::max<SizeValueType>(1, this->GetMultiThreader()->GetNumberOfWorkUnits()),
+    [&](SizeValueType) {
+      for (SizeValueType tile = nextTile++; tile < rowTiles * columnTiles; tile = nextTile++)
+      {
+        if (aborted || this->GetAbortGenerateData())
+        {
+          aborted = true;
+          return;
+        }
+        sampleTile(tile);
+      }
     },
     progress.GetProcessObject());
   if (aborted || this->GetAbortGenerateData())
