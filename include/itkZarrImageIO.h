@@ -157,6 +157,16 @@ private:
     Zlib
   };
 
+  // ReadImageInformation's parts: an OME-Zarr group's first dataset (its array's path, and
+  // per Zarr axis the voxel size and origin in mm); the array's .zarray (shape, chunks,
+  // codec, type, fill value); the axes (leading ones of length 1 dropped, the rest in ITK's
+  // order, with the geometry).
+  void
+  ReadOmeMultiscales(std::string & arrayPath, std::vector<double> & scale, std::vector<double> & translation);
+  void
+  ReadArrayMetadata();
+  void
+  SetAxes(const std::vector<double> & scale, const std::vector<double> & translation);
   void
   ReadChunk(const std::vector<SizeValueType> & chunkIndex, std::vector<char> & data) const;
   void

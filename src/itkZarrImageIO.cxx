@@ -104,6 +104,58 @@ Transformation(const Json & list, const char * type, std::vector<double> fallbac
   }
   return fallback;
 }
+
+// One element of the stored type holding a .zarray's fill value (a number, "NaN",
+// "Infinity" or "-Infinity"; 0 when absent).
+std::vector<char>
+FillValueBytes(const Json & fill, IOComponentEnum type, size_t componentSize)
+{
+  std::vector<char> bytes(componentSize, 0);
+  double            value = 0.0;
+  if (fill.is_number())
+  {
+    value = fill.get<double>();
+  }
+  else if (fill.is_string())
+  {
+    const std::string text = fill.get<std::string>();
+    value = text == "NaN" ? std::numeric_limits<double>::quiet_NaN()
+                          : (text == "-Infinity" ? -1.0 : 1.0) * std::numeric_limits<double>::infinity();
+  }
+  auto store = [&](auto typed) {
+    using T = decltype(typed);
+    const T v = static_cast<T>(value);
+    std::memcpy(bytes.data(), &v, sizeof(T));
+  };
+  switch (type)
+  {
+    case IOComponentEnum::UCHAR:
+      store(uint8_t{});
+      break;
+    case IOComponentEnum::CHAR:
+      store(int8_t{});
+      break;
+    case IOComponentEnum::USHORT:
+      store(uint16_t{});
+      break;
+    case IOComponentEnum::SHORT:
+      store(int16_t{});
+      break;
+    case IOComponentEnum::UINT:
+      store(uint32_t{});
+      break;
+    case IOComponentEnum::INT:
+      store(int32_t{});
+      break;
+    case IOComponentEnum::FLOAT:
+      store(float{});
+      break;
+    default:
+      store(double{});
+      break;
+  }
+  return bytes;
+}
 } // namespace
 
 ZarrImageIO::ZarrImageIO()
@@ -130,66 +182,80 @@ ZarrImageIO::CanReadFile(const char * fileName)
 void
 ZarrImageIO::ReadImageInformation()
 {
-  const fs::path root(m_FileName);
-  if (!fs::is_directory(root))
+  if (!fs::is_directory(fs::path(m_FileName)))
   {
     itkExceptionMacro(<< m_FileName << " is not a Zarr store (not a directory)");
   }
   // The array, and for an OME-Zarr image the scale and translation of its axes (Zarr order).
-  fs::path            array = root;
-  std::vector<double> scale, translation, unitScale;
+  std::string         array = m_FileName;
+  std::vector<double> scale, translation;
   m_HasGeometry = false;
-  if (!fs::is_regular_file(root / ".zarray"))
+  if (!fs::is_regular_file(fs::path(m_FileName) / ".zarray"))
   {
-    Json attributes;
-    if (!IsOmeGroup(root) || !ReadJson(root / ".zattrs", attributes))
-    {
-      itkExceptionMacro(<< m_FileName << " holds neither .zarray nor OME-Zarr multiscales metadata in .zattrs");
-    }
-    const Json & image = attributes["multiscales"][0];
-    if (!image.contains("datasets") || !image["datasets"].is_array() || image["datasets"].empty() ||
-        !image["datasets"][0].contains("path"))
-    {
-      itkExceptionMacro(<< m_FileName << ": OME-Zarr multiscales without datasets");
-    }
-    const Json & dataset = image["datasets"][0];
-    array = root / dataset["path"].get<std::string>();
-    if (image.contains("axes") && image["axes"].is_array())
-    {
-      for (const Json & axis : image["axes"])
-      {
-        const std::string unit = axis.is_object() ? axis.value("unit", "") : "";
-        const std::string type = axis.is_object() ? axis.value("type", "space") : "space";
-        const double      factor = type == "space" ? MillimetresPer(unit) : 1.0;
-        if (!std::isfinite(factor))
-        {
-          itkExceptionMacro(<< m_FileName << ": OME-Zarr axis unit \"" << unit << "\" is not a length unit");
-        }
-        unitScale.push_back(factor);
-      }
-    }
-    scale = Transformation(dataset.value("coordinateTransformations", Json()), "scale", {});
-    translation = Transformation(dataset.value("coordinateTransformations", Json()), "translation", {});
-    // Transformations of the whole multiscale apply after the dataset's.
-    const Json          global = image.value("coordinateTransformations", Json());
-    std::vector<double> globalScale = Transformation(global, "scale", {});
-    std::vector<double> globalTranslation = Transformation(global, "translation", {});
-    const size_t        n = std::max({ scale.size(), translation.size(), globalScale.size(), unitScale.size() });
-    scale.resize(n, 1.0);
-    translation.resize(n, 0.0);
-    globalScale.resize(n, 1.0);
-    globalTranslation.resize(n, 0.0);
-    unitScale.resize(n, 1.0);
-    for (size_t a = 0; a < n; ++a)
-    {
-      translation[a] = (globalScale[a] * translation[a] + globalTranslation[a]) * unitScale[a];
-      scale[a] = globalScale[a] * scale[a] * unitScale[a];
-    }
+    ReadOmeMultiscales(array, scale, translation);
     m_HasGeometry = !scale.empty();
   }
-  m_ArrayPath = array.string();
+  m_ArrayPath = array;
+  ReadArrayMetadata();
+  SetAxes(scale, translation);
+}
 
-  Json meta;
+void
+ZarrImageIO::ReadOmeMultiscales(std::string & arrayPath, std::vector<double> & scale, std::vector<double> & translation)
+{
+  const fs::path      root(m_FileName);
+  std::vector<double> unitScale;
+  Json                attributes;
+  if (!IsOmeGroup(root) || !ReadJson(root / ".zattrs", attributes))
+  {
+    itkExceptionMacro(<< m_FileName << " holds neither .zarray nor OME-Zarr multiscales metadata in .zattrs");
+  }
+  const Json & image = attributes["multiscales"][0];
+  if (!image.contains("datasets") || !image["datasets"].is_array() || image["datasets"].empty() ||
+      !image["datasets"][0].contains("path"))
+  {
+    itkExceptionMacro(<< m_FileName << ": OME-Zarr multiscales without datasets");
+  }
+  const Json & dataset = image["datasets"][0];
+  arrayPath = (root / dataset["path"].get<std::string>()).string();
+  if (image.contains("axes") && image["axes"].is_array())
+  {
+    for (const Json & axis : image["axes"])
+    {
+      const std::string unit = axis.is_object() ? axis.value("unit", "") : "";
+      const std::string type = axis.is_object() ? axis.value("type", "space") : "space";
+      const double      factor = type == "space" ? MillimetresPer(unit) : 1.0;
+      if (!std::isfinite(factor))
+      {
+        itkExceptionMacro(<< m_FileName << ": OME-Zarr axis unit \"" << unit << "\" is not a length unit");
+      }
+      unitScale.push_back(factor);
+    }
+  }
+  scale = Transformation(dataset.value("coordinateTransformations", Json()), "scale", {});
+  translation = Transformation(dataset.value("coordinateTransformations", Json()), "translation", {});
+  // Transformations of the whole multiscale apply after the dataset's.
+  const Json          global = image.value("coordinateTransformations", Json());
+  std::vector<double> globalScale = Transformation(global, "scale", {});
+  std::vector<double> globalTranslation = Transformation(global, "translation", {});
+  const size_t        n = std::max({ scale.size(), translation.size(), globalScale.size(), unitScale.size() });
+  scale.resize(n, 1.0);
+  translation.resize(n, 0.0);
+  globalScale.resize(n, 1.0);
+  globalTranslation.resize(n, 0.0);
+  unitScale.resize(n, 1.0);
+  for (size_t a = 0; a < n; ++a)
+  {
+    translation[a] = (globalScale[a] * translation[a] + globalTranslation[a]) * unitScale[a];
+    scale[a] = globalScale[a] * scale[a] * unitScale[a];
+  }
+}
+
+void
+ZarrImageIO::ReadArrayMetadata()
+{
+  const fs::path array(m_ArrayPath);
+  Json           meta;
   if (!ReadJson(array / ".zarray", meta) || !meta.is_object())
   {
     itkExceptionMacro(<< "cannot read the Zarr array metadata " << (array / ".zarray").string());
@@ -256,58 +322,17 @@ ZarrImageIO::ReadImageInformation()
     }
     this->SetComponentType(type->second);
     // The fill value of absent chunks, converted to the stored type.
-    const size_t component = this->GetComponentSize();
-    m_FillValue.assign(component, 0);
-    const Json & fill = meta.value("fill_value", Json());
-    double       value = 0.0;
-    if (fill.is_number())
-    {
-      value = fill.get<double>();
-    }
-    else if (fill.is_string())
-    {
-      const std::string text = fill.get<std::string>();
-      value = text == "NaN" ? std::numeric_limits<double>::quiet_NaN()
-                            : (text == "-Infinity" ? -1.0 : 1.0) * std::numeric_limits<double>::infinity();
-    }
-    auto store = [&](auto typed) {
-      using T = decltype(typed);
-      const T v = static_cast<T>(value);
-      std::memcpy(m_FillValue.data(), &v, sizeof(T));
-    };
-    switch (this->GetComponentType())
-    {
-      case IOComponentEnum::UCHAR:
-        store(uint8_t{});
-        break;
-      case IOComponentEnum::CHAR:
-        store(int8_t{});
-        break;
-      case IOComponentEnum::USHORT:
-        store(uint16_t{});
-        break;
-      case IOComponentEnum::SHORT:
-        store(int16_t{});
-        break;
-      case IOComponentEnum::UINT:
-        store(uint32_t{});
-        break;
-      case IOComponentEnum::INT:
-        store(int32_t{});
-        break;
-      case IOComponentEnum::FLOAT:
-        store(float{});
-        break;
-      default:
-        store(double{});
-        break;
-    }
+    m_FillValue = FillValueBytes(meta.value("fill_value", Json()), this->GetComponentType(), this->GetComponentSize());
   }
   catch (const Json::exception & e)
   {
     itkExceptionMacro(<< m_ArrayPath << ": malformed .zarray (" << e.what() << ")");
   }
+}
 
+void
+ZarrImageIO::SetAxes(const std::vector<double> & scale, const std::vector<double> & translation)
+{
   // Leading axes (time, channel) of length 1 are dropped; the rest become ITK's axes in
   // reverse order (Zarr's last axis varies fastest, as ITK's first).
   const size_t total = m_Shape.size();
