@@ -19,6 +19,7 @@
 #define itkSheetSegmentationImageFilter_h
 
 #include "itkImageToImageFilter.h"
+#include "itkProgressAccumulator.h"
 
 namespace itk {
 /** \class SheetSegmentationImageFilter
@@ -117,6 +118,12 @@ private:
    * `minimum` to `maximum`. */
   double
   ComputeAutomaticThreshold(const InputImageType * input, double minimum, double maximum);
+  /** The voxels at or above the threshold (1, others 0), of the scan smoothed first when
+   * it is noisy (the denoising sigma given, or measured when negative, in which case an
+   * automatic threshold is refined on the smoothed scan). The filters run under
+   * `progress`. */
+  typename MaskImageType::Pointer
+  ThresholdCandidates(const InputImageType * input, ProgressAccumulator * progress);
 
   bool          m_AutomaticThreshold{ true };
   double        m_Threshold{ 0.0 };

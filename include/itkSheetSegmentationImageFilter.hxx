@@ -192,44 +192,11 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::ComputeAutomaticThreshold
 }
 
 template <typename TInputImage, typename TMaskImage>
-void
-SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
+auto
+SheetSegmentationImageFilter<TInputImage, TMaskImage>::ThresholdCandidates(const InputImageType * input,
+                                                                           ProgressAccumulator *  progress) ->
+  typename MaskImageType::Pointer
 {
-  const InputImageType * input = this->GetInput();
-  if (input == nullptr || input->GetLargestPossibleRegion().GetNumberOfPixels() == 0)
-  {
-    itkExceptionMacro(<< "the volume is empty");
-  }
-  double minimum = 0.0, maximum = 0.0;
-  SheetSegmentationDetail::ValueRange(input, input->GetBufferedRegion(), false, minimum, maximum);
-  if (minimum > maximum)
-  {
-    // Only NaN: no value was compared.
-    itkExceptionMacro(<< "the volume has no finite voxel (all " << input->GetLargestPossibleRegion().GetNumberOfPixels()
-                      << " are NaN): nothing to segment");
-  }
-  if (std::isinf(minimum) || std::isinf(maximum))
-  {
-    itkExceptionMacro(<< "the volume holds infinite values (range " << minimum << " to " << maximum
-                      << "): nothing to segment");
-  }
-  if (!(maximum > minimum))
-  {
-    itkExceptionMacro(<< "the volume is constant (" << minimum << "): nothing to segment");
-  }
-  if (m_AutomaticThreshold)
-  {
-    m_Threshold = ComputeAutomaticThreshold(input, minimum, maximum);
-  }
-  if (!(maximum >= m_Threshold))
-  {
-    itkExceptionMacro(<< "nothing at or above the threshold " << m_Threshold << " (volume maximum " << maximum << ")");
-  }
-
-  auto progress = ProgressAccumulator::New();
-  progress->SetMiniPipelineFilter(this);
-
-  using LabelImageType = Image<SizeValueType, ImageDimension>;
   // A noisy scan is smoothed before thresholding, enough to keep noise out of the mask but
   // not so much that turns two voxels apart merge.
   m_AppliedDenoisingSigma = m_DenoisingSigma;
@@ -299,6 +266,49 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
     threshold->Update();
     candidates = threshold->GetOutput();
   }
+  return candidates;
+}
+
+template <typename TInputImage, typename TMaskImage>
+void
+SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
+{
+  const InputImageType * input = this->GetInput();
+  if (input == nullptr || input->GetLargestPossibleRegion().GetNumberOfPixels() == 0)
+  {
+    itkExceptionMacro(<< "the volume is empty");
+  }
+  double minimum = 0.0, maximum = 0.0;
+  SheetSegmentationDetail::ValueRange(input, input->GetBufferedRegion(), false, minimum, maximum);
+  if (minimum > maximum)
+  {
+    // Only NaN: no value was compared.
+    itkExceptionMacro(<< "the volume has no finite voxel (all " << input->GetLargestPossibleRegion().GetNumberOfPixels()
+                      << " are NaN): nothing to segment");
+  }
+  if (std::isinf(minimum) || std::isinf(maximum))
+  {
+    itkExceptionMacro(<< "the volume holds infinite values (range " << minimum << " to " << maximum
+                      << "): nothing to segment");
+  }
+  if (!(maximum > minimum))
+  {
+    itkExceptionMacro(<< "the volume is constant (" << minimum << "): nothing to segment");
+  }
+  if (m_AutomaticThreshold)
+  {
+    m_Threshold = ComputeAutomaticThreshold(input, minimum, maximum);
+  }
+  if (!(maximum >= m_Threshold))
+  {
+    itkExceptionMacro(<< "nothing at or above the threshold " << m_Threshold << " (volume maximum " << maximum << ")");
+  }
+
+  auto progress = ProgressAccumulator::New();
+  progress->SetMiniPipelineFilter(this);
+
+  using LabelImageType = Image<SizeValueType, ImageDimension>;
+  const typename MaskImageType::Pointer candidates = ThresholdCandidates(input, progress);
   auto components = ConnectedComponentImageFilter<MaskImageType, LabelImageType>::New();
   components->SetInput(candidates);
   components->FullyConnectedOff();

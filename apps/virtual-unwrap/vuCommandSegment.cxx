@@ -162,7 +162,7 @@ RunSegment(const SegmentOptions & options)
   // sheet of every voxel of the mask.
   for (unsigned int i = 0; i < sheets; ++i)
   {
-    char name[16];
+    char name[24]; // "sheet-" and up to ten digits
     std::snprintf(name, sizeof(name), "sheet-%02u", i + 1);
     const std::filesystem::path folder = sheets > 1 ? directory / name : directory;
     std::filesystem::create_directories(folder);
