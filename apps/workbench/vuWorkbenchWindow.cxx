@@ -173,6 +173,16 @@ WorkbenchWindow::~WorkbenchWindow()
 void
 WorkbenchWindow::BuildWidgets()
 {
+  BuildViews();
+  BuildSheetScene();
+  BuildSliceScene();
+  BuildInteraction();
+  BuildControlPanel();
+}
+
+void
+WorkbenchWindow::BuildViews()
+{
   // The three views and the energy plot.
   auto makeView = [](vtkSmartPointer<vtkRenderer> & renderer, const double background[3]) {
     auto * view = new QVTKOpenGLNativeWidget;
@@ -215,7 +225,11 @@ WorkbenchWindow::BuildWidgets()
   centralLayout->addWidget(m_ErrorBanner);
   centralLayout->addWidget(views, 1);
   setCentralWidget(central);
+}
 
+void
+WorkbenchWindow::BuildSheetScene()
+{
   // Sheet pipeline: one point set for the surface, the mesh lines and the particles.
   m_SheetData = vtkSmartPointer<vtkPolyData>::New();
   m_ParticleData = vtkSmartPointer<vtkPolyData>::New();
@@ -261,7 +275,11 @@ WorkbenchWindow::BuildWidgets()
   m_FlatNote->SetDisplayPosition(8, 8);
   m_FlatRenderer->AddActor2D(m_FlatNote);
   m_FlatRenderer->GetActiveCamera()->ParallelProjectionOn();
+}
 
+void
+WorkbenchWindow::BuildSliceScene()
+{
   // Slice view: the scan's slice and the traced sheet in it.
   m_SliceImage = vtkSmartPointer<vtkImageData>::New();
   m_SliceActor = vtkSmartPointer<vtkImageActor>::New();
@@ -284,7 +302,11 @@ WorkbenchWindow::BuildWidgets()
   m_SliceTraceActor->SetVisibility(false);
   m_SliceRenderer->AddActor(m_SliceTraceActor);
   m_SliceRenderer->GetActiveCamera()->ParallelProjectionOn();
+}
 
+void
+WorkbenchWindow::BuildInteraction()
+{
   // Interaction: the camera style, and the rubber band for locking (right button rotates,
   // middle pans, wheel zooms there too).
   m_CameraStyle = vtkSmartPointer<vtkInteractorStyleTrackballCamera>::New();
@@ -319,11 +341,52 @@ WorkbenchWindow::BuildWidgets()
   frameCounter->SetCallback(
     [](vtkObject *, unsigned long, void * frames, void *) { ++*static_cast<uint64_t *>(frames); });
   m_SheetView->renderWindow()->AddObserver(vtkCommand::EndEvent, frameCounter);
+}
 
+void
+WorkbenchWindow::BuildControlPanel()
+{
   // Control panel.
   auto * panel = new QWidget;
   auto * layout = new QVBoxLayout(panel);
 
+  AddSimulationControls(layout);
+  AddParticleControls(layout);
+  AddDisplayControls(layout);
+  AddObjectControls(layout);
+  AddFocalPlaneControls(layout);
+
+  auto * sliceBox = new QGroupBox("CT slice");
+  auto * sliceLayout = new QVBoxLayout(sliceBox);
+  m_SliceIndex = Slider(0, 0, 0);
+  connect(m_SliceIndex, &QSlider::valueChanged, this, [this] { UpdateSlice(); });
+  sliceLayout->addWidget(m_SliceIndex);
+  layout->addWidget(sliceBox);
+  layout->addStretch(1);
+
+  auto * scroll = new QScrollArea;
+  scroll->setWidget(panel);
+  scroll->setWidgetResizable(true);
+  auto * dock = new QDockWidget("Controls", this);
+  dock->setWidget(scroll);
+  dock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
+  addDockWidget(Qt::RightDockWidgetArea, dock);
+
+  m_Progress = new QProgressBar;
+  m_Progress->setRange(0, 1000);
+  m_Progress->setMaximumWidth(220);
+  m_Progress->hide();
+  m_Cancel = new QPushButton("Cancel");
+  m_Cancel->hide();
+  connect(m_Cancel, &QPushButton::clicked, this, [this] { CancelWork(); });
+  statusBar()->addPermanentWidget(m_Progress);
+  statusBar()->addPermanentWidget(m_Cancel);
+  FocalPlaneChanged();
+}
+
+void
+WorkbenchWindow::AddSimulationControls(QVBoxLayout * layout)
+{
   auto * simulation = new QGroupBox("Simulation");
   auto * form = new QFormLayout(simulation);
   m_Integrator = new QComboBox;
@@ -374,7 +437,11 @@ WorkbenchWindow::BuildWidgets()
   }
   connect(m_Integrator, QOverload<int>::of(&QComboBox::currentIndexChanged), this, [this] { ControlsChanged(); });
   connect(m_AutoAdvance, &QCheckBox::toggled, this, [this] { ControlsChanged(); });
+}
 
+void
+WorkbenchWindow::AddParticleControls(QVBoxLayout * layout)
+{
   auto * particles = new QGroupBox("Particles");
   auto * particleLayout = new QGridLayout(particles);
   m_Mode = new QComboBox;
@@ -396,7 +463,11 @@ WorkbenchWindow::BuildWidgets()
   m_LockCount = new QLabel("locked: 0 (red), free: blue");
   particleLayout->addWidget(m_LockCount, 2, 0, 1, 3);
   layout->addWidget(particles);
+}
 
+void
+WorkbenchWindow::AddDisplayControls(QVBoxLayout * layout)
+{
   auto * display = new QGroupBox("Display");
   auto * displayLayout = new QGridLayout(display);
   m_ShowTexture = new QCheckBox("surface (textured)");
@@ -427,7 +498,11 @@ WorkbenchWindow::BuildWidgets()
   connect(m_Parallel, &QCheckBox::toggled, this, [this](bool on) { SetParallelProjection(on); });
   displayLayout->addWidget(m_Parallel, 3, 2);
   layout->addWidget(display);
+}
 
+void
+WorkbenchWindow::AddObjectControls(QVBoxLayout * layout)
+{
   auto * object = new QGroupBox("Object (translate mm, rotate degrees, scale)");
   auto * objectLayout = new QGridLayout(object);
   for (int k = 0; k < 7; ++k)
@@ -444,7 +519,11 @@ WorkbenchWindow::BuildWidgets()
     objectLayout->addWidget(m_Transform[k], k / 3, k % 3);
   }
   layout->addWidget(object);
+}
 
+void
+WorkbenchWindow::AddFocalPlaneControls(QVBoxLayout * layout)
+{
   auto * focus = new QGroupBox("Focal plane");
   auto * focusForm = new QFormLayout(focus);
   m_FocusOffset = Slider(-100, 100, 0); // x 0.01 mm
@@ -465,33 +544,6 @@ WorkbenchWindow::BuildWidgets()
   }
   connect(m_FocusFilter, QOverload<int>::of(&QComboBox::currentIndexChanged), this, [this] { FocalPlaneChanged(); });
   layout->addWidget(focus);
-
-  auto * sliceBox = new QGroupBox("CT slice");
-  auto * sliceLayout = new QVBoxLayout(sliceBox);
-  m_SliceIndex = Slider(0, 0, 0);
-  connect(m_SliceIndex, &QSlider::valueChanged, this, [this] { UpdateSlice(); });
-  sliceLayout->addWidget(m_SliceIndex);
-  layout->addWidget(sliceBox);
-  layout->addStretch(1);
-
-  auto * scroll = new QScrollArea;
-  scroll->setWidget(panel);
-  scroll->setWidgetResizable(true);
-  auto * dock = new QDockWidget("Controls", this);
-  dock->setWidget(scroll);
-  dock->setFeatures(QDockWidget::DockWidgetMovable | QDockWidget::DockWidgetFloatable);
-  addDockWidget(Qt::RightDockWidgetArea, dock);
-
-  m_Progress = new QProgressBar;
-  m_Progress->setRange(0, 1000);
-  m_Progress->setMaximumWidth(220);
-  m_Progress->hide();
-  m_Cancel = new QPushButton("Cancel");
-  m_Cancel->hide();
-  connect(m_Cancel, &QPushButton::clicked, this, [this] { CancelWork(); });
-  statusBar()->addPermanentWidget(m_Progress);
-  statusBar()->addPermanentWidget(m_Cancel);
-  FocalPlaneChanged();
 }
 
 void

@@ -53,6 +53,7 @@ class QLabel;
 class QProgressBar;
 class QPushButton;
 class QSlider;
+class QVBoxLayout;
 class QVTKOpenGLNativeWidget;
 
 namespace vu {
@@ -236,6 +237,28 @@ private slots:
 private:
   void
   BuildWidgets();
+  // BuildWidgets' parts, in the order it calls them.
+  void
+  BuildViews();
+  void
+  BuildSheetScene();
+  void
+  BuildSliceScene();
+  void
+  BuildInteraction();
+  void
+  BuildControlPanel();
+  // The control panel's groups, each added to the panel's layout.
+  void
+  AddSimulationControls(QVBoxLayout * layout);
+  void
+  AddParticleControls(QVBoxLayout * layout);
+  void
+  AddDisplayControls(QVBoxLayout * layout);
+  void
+  AddObjectControls(QVBoxLayout * layout);
+  void
+  AddFocalPlaneControls(QVBoxLayout * layout);
   void
   BuildMenus();
   void
