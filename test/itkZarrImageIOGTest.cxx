@@ -379,8 +379,16 @@ WriteStore(const std::string & name, bool compressed, std::mt19937 & random)
   // Regions one after the other: chunks cut by a region's edge are merged.
   writer->SetNumberOfStreamDivisions(static_cast<unsigned>(draw(1, 5)));
   writer->Update();
-  // One progress event before the first region and one after each.
-  EXPECT_EQ(progress, writer->GetNumberOfStreamDivisions() + 1) << name;
+  // One progress event before the first region and one after each (the splitter makes
+  // fewer regions than asked when the image is thin along the axis it splits).
+  itk::ImageIORegion whole(3);
+  for (unsigned int d = 0; d < 3; ++d)
+  {
+    whole.SetIndex(d, 0);
+    whole.SetSize(d, size[d]);
+  }
+  EXPECT_EQ(progress, io->GetActualNumberOfSplitsForWriting(writer->GetNumberOfStreamDivisions(), whole, whole) + 1)
+    << name;
   return { { "name", name },
            { "salt", salt },
            { "size_xyz", { size[0], size[1], size[2] } },
