@@ -18,7 +18,6 @@
 #include "itkSheetRollAxis.h"
 #include "itkBinaryBallStructuringElement.h"
 #include "itkBinaryDilateImageFilter.h"
-#include "itkMultiThreaderBase.h"
 #include "itkNearestNeighborInterpolateImageFunction.h"
 #include "itkParallelImageRows.h"
 #include "itkRecursiveGaussianImageFilter.h"
@@ -42,15 +41,15 @@ using IntensityImageType = SheetRollAxis::IntensityImageType;
 std::array<IntensityImageType::Pointer, 3>
 GaussianDerivatives(const IntensityImageType * input, const IntensityImageType::SpacingType & sigmas)
 {
-  // The gradient of itk::GradientRecursiveGaussianImageFilter, value for value (the same
-  // recursive filters, sigmas and order: the derivative along d with the last sigma, then
-  // smoothing along the other two axes with the first and second), without its
-  // single-threaded copy of every derivative into a vector image and pass over it for the
-  // direction (applied here only to the voxels the tensor reads): on a scan of 180 M
-  // voxels those took six seconds on one thread.
+  // The derivatives of itk::GradientRecursiveGaussianImageFilter, value for value (the
+  // same recursive filters, sigmas and order: the derivative along d with the last sigma,
+  // then smoothing along the other two axes with the first and second), per voxel. Its
+  // single-threaded copy of every derivative into a vector image, per physical unit, and
+  // pass over it for the direction are left out (the caller divides by the spacing and
+  // applies the direction only at the voxels the tensor reads): on a scan of 180 M voxels
+  // those took six seconds on one thread.
   using FilterType = RecursiveGaussianImageFilter<IntensityImageType, IntensityImageType>;
   std::array<IntensityImageType::Pointer, 3> derivatives;
-  const auto &                               spacing = input->GetSpacing();
   for (unsigned int d = 0; d < 3; ++d)
   {
     auto derivative = FilterType::New();
@@ -78,21 +77,6 @@ GaussianDerivatives(const IntensityImageType * input, const IntensityImageType::
     last->Update();
     derivatives[d] = last->GetOutput();
     derivatives[d]->DisconnectPipeline();
-    // Per physical unit, as the gradient filter gives it (divided in double, then float).
-    float * const           values = derivatives[d]->GetBufferPointer();
-    const SizeValueType     count = derivatives[d]->GetBufferedRegion().GetNumberOfPixels();
-    const double            step = spacing[d];
-    constexpr SizeValueType block = SizeValueType{ 1 } << 16;
-    MultiThreaderBase::New()->ParallelizeArray(
-      0,
-      (count + block - 1) / block,
-      [values, step, count](SizeValueType b) {
-        for (SizeValueType i = b * block; i < std::min(count, (b + 1) * block); ++i)
-        {
-          values[i] = static_cast<float>(static_cast<double>(values[i]) / step);
-        }
-      },
-      nullptr);
   }
   return derivatives;
 }
@@ -129,6 +113,7 @@ SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageTy
   }
   // Sigma: one voxel along each axis (as ITK's gradient filter assigns a sigma array).
   const std::array<IntensityImageType::Pointer, 3> derivatives = GaussianDerivatives(input, sheetMask->GetSpacing());
+  const auto &                                     step = input->GetSpacing();
   const float *                                    derivative[3] = { derivatives[0]->GetBufferPointer(),
                                                                      derivatives[1]->GetBufferPointer(),
                                                                      derivatives[2]->GetBufferPointer() };
@@ -173,12 +158,15 @@ SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageTy
           continue;
         }
         std::array<double, 10> & sum = onSheet ? sheetSums[k] : airSums[k];
-        // The gradient in the physical frame (the image's direction applied to the index
-        // frame's derivatives).
-        const CovariantVector<float, 3> local(
-          std::array<float, 3>{ derivative[0][rowStart + i], derivative[1][rowStart + i], derivative[2][rowStart + i] }
-            .data());
-        CovariantVector<float, 3> physical;
+        // The gradient in the physical frame: per physical unit, as the gradient filter
+        // gives it (divided in double, then float), then the image's direction applied.
+        float perUnit[3];
+        for (unsigned d = 0; d < 3; ++d)
+        {
+          perUnit[d] = static_cast<float>(static_cast<double>(derivative[d][rowStart + i]) / step[d]);
+        }
+        const CovariantVector<float, 3> local(perUnit);
+        CovariantVector<float, 3>       physical;
         input->TransformLocalVectorToPhysicalVector(local, physical);
         for (unsigned r = 0; r < 3; ++r)
         {
