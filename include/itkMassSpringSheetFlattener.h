@@ -128,7 +128,10 @@ ToString(SheetFlatteningPhaseEnum phase);
     "grid meshes: simulate every n-th row and column, then relax every particle; 0: automatic "                 \
     "(see --coarse-particles), 1: the full mesh")                                                               \
   X(unsigned int, CoarseParticles, 3000, 4, 1u << 30, "coarse-particles", "coarse_particles",                   \
-    "grid meshes, automatic coarsening: simulate at most about this many particles")
+    "grid meshes, automatic coarsening: simulate at most about this many particles")                            \
+  X(unsigned int, StraightenRows, 1, 0, 1, "straighten-rows", "straighten_rows",                                \
+    "grid meshes: after relaxing, lay the rows straight (the slow in-plane bend a long strip "                  \
+    "keeps; a sheet rolled or folded about an axis develops with straight rows); 0: off")
 // clang-format on
 
 /** Parameters of MassSpringSheetFlattener: the numeric ones of VU_MASS_SPRING_PARAMETERS
@@ -178,6 +181,9 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
   /** Triangles of the flat mesh turned over against the others (where the sheet lies folded
    * onto itself, so that its texture does not read there). */
   size_t FlippedTriangles{ 0 };
+  /** The in-plane bend laid straight (StraightenRows): the centre line's largest distance
+   * from its chord before, in the mesh's units; 0 when the rows were not straightened. */
+  double RowBend{ 0.0 };
   /** What a caller should not miss: phases stopped at their step limit before they
    * converged, triangles turned over; empty when the flattening converged cleanly. */
   std::vector<std::string> Warnings;
@@ -202,7 +208,10 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
  *    on the plane (restitution k_r);
  * 3. relax: the sheet is laid on the plane and relaxed quasi-statically with the implicit
  *    solver (in-plane spring projection) until the residual force is below
- *    RelaxationTolerance.
+ *    RelaxationTolerance;
+ * 4. straighten (grid meshes, StraightenRows): the slow in-plane bend a long strip keeps
+ *    is laid straight, since a sheet rolled or folded about an axis develops with straight
+ *    rows (the bend taken out is reported as RowBend).
  * The flat mesh (same points, same triangles, z = 0) is expressed in the plane: x along
  * the sheet (on grid meshes the mean direction of the rows, towards increasing columns,
  * i.e. away from the sheet's start, so that what was written along the sheet runs along

@@ -657,6 +657,10 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
     m_Report.SpringEvaluations += fine.GetNumberOfForceEvaluations() * fine.GetNumberOfSprings();
     flat.Points = fine.GetPositions();
   }
+  if (p.StraightenRows != 0)
+  {
+    m_Report.RowBend = FlatFrame::StraightenRows(surface, flat);
+  }
   FlatFrame::Normalise(flat);
   for (const auto & phase : m_Report.Phases)
   {

@@ -21,6 +21,9 @@
 
 #include "gtest/gtest.h"
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <iostream>
 #include <set>
 
@@ -132,6 +135,68 @@ TEST(MassSpringSheetFlattener, CoarseToFineOnALargerRoll)
   EXPECT_LE(c->GetEdgeStrainP95(), 0.005);
   EXPECT_LE(c->GetAreaDistortion(), 0.005);
   EXPECT_EQ(c->GetNumberOfFlippedTriangles(), 0u);
+}
+
+// A 10-turn roll (5 mm inner radius, 1 mm pitch, 10 mm wide) whose radius grows by a
+// part in ten thousand per millimetre along its axis: its rows differ in length by a
+// thousandth from one edge to the other, so the flat strip is an arc (sagitta about
+// epsilon L^2 / 8 = 4.9 mm over its 628 mm). Its rows come out straight and the bend taken
+// out is reported; with StraightenRows off the arc stays. A strip lying in a plane, bent
+// there into a ring (20 mm radius), keeps its shape: only bends longer than the sheet's
+// diameter times pi are taken out.
+namespace {
+// The largest distance of a flat grid mesh's middle row from the straight line through
+// its ends.
+double
+MiddleRowBend(const itk::SheetMesh & flat)
+{
+  const int      columns = flat.GridColumns;
+  const size_t   row = static_cast<size_t>(flat.GridRows / 2) * columns;
+  const double * a = &flat.Points[3 * row];
+  const double * b = &flat.Points[3 * (row + columns - 1)];
+  const double   length = std::hypot(b[0] - a[0], b[1] - a[1]);
+  double         bend = 0.0;
+  for (int c = 0; c < columns; ++c)
+  {
+    const double * p = &flat.Points[3 * (row + c)];
+    bend = std::max(bend, std::abs((p[0] - a[0]) * (b[1] - a[1]) - (p[1] - a[1]) * (b[0] - a[0])) / length);
+  }
+  return bend;
+}
+} // namespace
+
+TEST(MassSpringSheetFlattener, ALongStripBentInItsPlaneComesOutWithStraightRows)
+{
+  itk::SheetMesh surface = vu::SpiralRollMesh(5.0, 1.0, 10.0, 0.8, 10.0, nullptr);
+  for (size_t i = 0; i < surface.GetNumberOfPoints(); ++i)
+  {
+    const double grow = 1.0 + 1e-4 * surface.Points[3 * i + 2];
+    surface.Points[3 * i] *= grow;
+    surface.Points[3 * i + 1] *= grow;
+  }
+  itk::MassSpringFlatteningParameters parameters;
+  itk::MassSpringSheetFlattener       flattener;
+  itk::SheetMesh                      flat;
+  parameters.StraightenRows = 0;
+  FlattenAndMeasure(flattener, surface, parameters, &flat);
+  const double arc = MiddleRowBend(flat);
+  EXPECT_NEAR(arc, 4.9, 1.0);
+  EXPECT_EQ(flattener.GetReport().RowBend, 0.0);
+
+  parameters.StraightenRows = 1;
+  auto c = FlattenAndMeasure(flattener, surface, parameters, &flat);
+  EXPECT_LT(MiddleRowBend(flat), 0.05 * arc);
+  EXPECT_NEAR(flattener.GetReport().RowBend, arc, 0.2 * arc);
+  EXPECT_EQ(c->GetNumberOfFlippedTriangles(), 0u);
+  EXPECT_LE(c->GetEdgeStrainP95(), 0.005);
+
+  const itk::SheetMesh ring = vu::SquareGridMesh(25, [](int r, int c) {
+    const double angle = 0.1 * c - 1.2, rho = 20.0 + 0.5 * r - 6.0;
+    return std::array<double, 3>{ rho * std::sin(angle), rho * std::cos(angle), 0.0 };
+  });
+  FlattenAndMeasure(flattener, ring, parameters, &flat);
+  EXPECT_LT(flattener.GetReport().RowBend, 0.5);
+  EXPECT_GT(MiddleRowBend(flat), 5.0);
 }
 
 // A 10-turn roll with a tight inner curl (2.5 mm radius, 0.75 mm pitch, 0.74 mm spacing):

@@ -163,6 +163,7 @@ ToJson(const itk::MassSpringFlatteningReport & report)
            { "spring_evaluations", report.SpringEvaluations },
            { "seconds", report.Seconds },
            { "flipped_triangles", report.FlippedTriangles },
+           { "row_bend_straightened", report.RowBend },
            { "warnings", report.Warnings },
            { "phases", phases } };
 }
