@@ -61,6 +61,16 @@ MakeFilter(const itk::SheetMesh & surface, const itk::SheetMesh & flat, const vu
   return filter;
 }
 
+// The filter over the grid mesh (columns x 7) of a phantom sheet in its volume.
+template <typename TSheet>
+FilterType::Pointer
+MakeFilter(const TSheet & sheet, int columns, const vu::VolumeType * volume)
+{
+  itk::SheetMesh flat;
+  const auto     surface = vu::MakeSheetMesh(sheet, columns, 7, flat);
+  return MakeFilter(surface, flat, volume);
+}
+
 // Lets the developer look at a texture: written to the build tree, not compared.
 void
 WriteTexture(const FilterType * filter, const std::string & name)
@@ -203,11 +213,7 @@ TEST(FlattenedTextureImageFilter, FlatSheetTextureMatchesInk)
 {
   const vu::TiltedPlane     plane;
   const vu::PhantomSettings settings; // ink through the whole thickness
-  const auto                volume = vu::MakeTiltedPlaneVolume(plane, settings);
-  itk::SheetMesh            flat;
-  const auto                surface = vu::MakeSheetMesh(
-    9, 7, [&plane](double u, double v) { return plane.At(u, v); }, flat);
-  auto filter = MakeFilter(surface, flat, volume);
+  auto                      filter = MakeFilter(plane, 9, vu::MakeTiltedPlaneVolume(plane, settings));
   filter->SetNumberOfLayers(3);
   filter->SetLayerSpacing(0.5);
   filter->Update();
@@ -234,13 +240,8 @@ TEST(FlattenedTextureImageFilter, FlatSheetTextureMatchesInk)
 
 TEST(FlattenedTextureImageFilter, MaxFilterRecoversInkOffTheMidSurface)
 {
-  const vu::TiltedPlane     plane;
-  const vu::PhantomSettings settings = vu::FaceInkSettings();
-  const auto                volume = vu::MakeTiltedPlaneVolume(plane, settings);
-  itk::SheetMesh            flat;
-  const auto                surface = vu::MakeSheetMesh(
-    9, 7, [&plane](double u, double v) { return plane.At(u, v); }, flat);
-  auto filter = MakeFilter(surface, flat, volume);
+  const vu::TiltedPlane plane;
+  auto                  filter = MakeFilter(plane, 9, vu::MakeTiltedPlaneVolume(plane, vu::FaceInkSettings()));
   filter->Update();
   const double single = Fidelity(filter);
   WriteTexture(filter, "FlattenedTexture_FaceInk_SingleLayer");
@@ -257,13 +258,8 @@ TEST(FlattenedTextureImageFilter, MaxFilterRecoversInkOffTheMidSurface)
 
 TEST(FlattenedTextureImageFilter, CylinderShellWithTrueFlattening)
 {
-  const vu::CylinderShell   shell;
-  const vu::PhantomSettings settings = vu::FaceInkSettings();
-  const auto                volume = vu::MakeCylinderShellVolume(shell, settings);
-  itk::SheetMesh            flat;
-  const auto                surface = vu::MakeSheetMesh(
-    61, 7, [&shell](double u, double v) { return shell.At(u, v); }, flat);
-  auto filter = MakeFilter(surface, flat, volume);
+  const vu::CylinderShell shell;
+  auto                    filter = MakeFilter(shell, 61, vu::MakeCylinderShellVolume(shell, vu::FaceInkSettings()));
   filter->SetNumberOfLayers(5);
   filter->SetLayerSpacing(0.5);
   filter->SetLayerFilter(Filter::Max);

@@ -116,9 +116,8 @@ TEST(LayeredTextureMeshFilter, MaxFilterRecoversInkOffTheMidSurface)
   const vu::PhantomSettings settings = vu::FaceInkSettings();
   const auto                volume = vu::MakeTiltedPlaneVolume(plane, settings);
   itk::SheetMesh            flat;
-  const itk::SheetMesh      sheet = vu::MakeSheetMesh(
-    81, 49, [&plane](double u, double v) { return plane.At(u, v); }, flat);
-  std::vector<double> ink;
+  const itk::SheetMesh      sheet = vu::MakeSheetMesh(plane, 81, 49, flat);
+  std::vector<double>       ink;
   for (size_t i = 0; i < flat.GetNumberOfPoints(); ++i)
   {
     ink.push_back(vu::InkAt(flat.Points[3 * i], flat.Points[3 * i + 1]) ? 1.0 : 0.0);

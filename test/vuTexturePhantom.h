@@ -370,6 +370,16 @@ MakeCylinderShellVolume(const CylinderShell & shell, const PhantomSettings & set
     [&shell](const double x[3], double & d, double & u, double & v) { return shell.Coordinates(x, d, u, v); },
     settings);
 }
+
+/** The grid mesh (columns x rows) of a phantom sheet's mid-surface (TiltedPlane,
+ * CylinderShell: anything with At(u, v)); flat receives its exact flattening. */
+template <typename TSheet>
+inline itk::SheetMesh
+MakeSheetMesh(const TSheet & sheet, int columns, int rows, itk::SheetMesh & flat)
+{
+  return MakeSheetMesh(
+    columns, rows, [&sheet](double u, double v) { return sheet.At(u, v); }, flat);
+}
 } // namespace vu
 
 #endif
