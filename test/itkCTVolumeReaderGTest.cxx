@@ -247,28 +247,16 @@ Box(long x, long y, long z, unsigned long sx, unsigned long sy, unsigned long sz
   return region;
 }
 
-// A spacing (TTriple = ImageType::SpacingType) or a point of the given coordinates.
-template <typename TTriple>
-TTriple
-Triple(double x, double y, double z)
-{
-  TTriple t;
-  t[0] = x;
-  t[1] = y;
-  t[2] = z;
-  return t;
-}
-
 ImageType::SpacingType
 Vec3(double x, double y, double z)
 {
-  return Triple<ImageType::SpacingType>(x, y, z);
+  return vu::Triple<ImageType::SpacingType>(x, y, z);
 }
 
 ImageType::PointType
 Point3(double x, double y, double z)
 {
-  return Triple<ImageType::PointType>(x, y, z);
+  return vu::Triple<ImageType::PointType>(x, y, z);
 }
 
 bool

@@ -27,6 +27,7 @@
 #include "itkImageRegionIteratorWithIndex.h"
 #include "itkZarrImageIO.h"
 #include "vuExpectRefusal.h"
+#include "vuTestHelpers.h"
 #include "vuVoxelCount.h"
 
 #include <gtest/gtest.h>
@@ -440,11 +441,7 @@ TEST(ZarrImageIO, WrittenStoresReadBackVoxelByVoxelWithTheirGeometry)
     rewrite->SetFileName(StoreDirectory() + "/again.zarr");
     rewrite->Update();
     again->SetOrigin(ImageType::PointType{ { { 1.5, -2.0, 3.0 } } });
-    ImageType::SpacingType spacing;
-    spacing[0] = 0.5;
-    spacing[1] = 0.25;
-    spacing[2] = 2.0;
-    again->SetSpacing(spacing);
+    again->SetSpacing(vu::Triple<ImageType::SpacingType>(0.5, 0.25, 2.0));
     rewrite->Modified();
     rewrite->Update();
     auto                     io = itk::ZarrImageIO::New();
