@@ -22,6 +22,7 @@
 #include "vuTestMeshes.h"
 
 #include <cmath>
+#include <iostream>
 #include <sstream>
 #include <stdexcept>
 
@@ -89,6 +90,53 @@ WriteFlatteningCsvHeader(std::ostream & out)
 {
   out << "mesh,vertices,method,setting,seconds,status,edge_strain_mean,edge_strain_p95,edge_strain_max,"
          "area_distortion,total_area_ratio,angle_distortion_deg,l2_stretch,linf_stretch,flipped,scale_applied\n";
+}
+
+bool
+ReadFlatteningBenchmarkOption(int argc, char * argv[], int & a, FlatteningBenchmarkOptions & options)
+{
+  const std::string arg = argv[a];
+  if (a + 1 >= argc)
+  {
+    return false;
+  }
+  if (arg == "--meshes")
+  {
+    options.Meshes = SplitList(argv[++a]);
+  }
+  else if (arg == "--methods")
+  {
+    options.Methods = SplitList(argv[++a]);
+  }
+  else if (arg == "--csv")
+  {
+    options.CsvPath = argv[++a];
+  }
+  else
+  {
+    return false;
+  }
+  return true;
+}
+
+int
+FlatteningBenchmarkUsage(const std::string & program, const std::string & methods, const std::string & extra)
+{
+  std::cerr << "usage: " << program << " [--meshes LIST] [--methods " << methods << "] [--csv FILE] " << extra
+            << std::endl;
+  return 2;
+}
+
+std::ostream &
+OpenFlatteningCsv(const std::string & path, std::ofstream & file)
+{
+  if (!path.empty())
+  {
+    file.open(path);
+  }
+  std::ostream & out = path.empty() ? std::cout : file;
+  WriteFlatteningCsvHeader(out);
+  return out;
 }
 
 void

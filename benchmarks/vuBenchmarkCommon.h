@@ -23,6 +23,7 @@
 // the system Eigen) can include it.
 #include "itkSheetMesh.h"
 
+#include <fstream>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -46,6 +47,26 @@ SplitList(const std::string & text);
 
 void
 WriteFlatteningCsvHeader(std::ostream & out);
+
+/** The options every flattening benchmark takes: --meshes LIST, --methods LIST, --csv FILE. */
+struct FlatteningBenchmarkOptions
+{
+  std::vector<std::string> Meshes;
+  std::vector<std::string> Methods;
+  std::string              CsvPath;
+};
+/** Reads argv[a] into options when it is one of those options with its value (and moves a
+ * onto the value); false when it is not. */
+bool
+ReadFlatteningBenchmarkOption(int argc, char * argv[], int & a, FlatteningBenchmarkOptions & options);
+/** Prints "usage: program [--meshes LIST] [--methods methods] [--csv FILE] extra" on
+ * standard error and returns 2, the exit status of a wrong command line. */
+int
+FlatteningBenchmarkUsage(const std::string & program, const std::string & methods, const std::string & extra);
+/** Where the CSV goes: the file at path, opened into file, or standard output when path is
+ * empty; the header is written. */
+std::ostream &
+OpenFlatteningCsv(const std::string & path, std::ofstream & file);
 /** One result: distortion of flat against surface (peers' flat meshes are first scaled by
  * the uniform factor that best matches edge lengths, since their scale is arbitrary), or
  * the failure status when flat is empty. */

@@ -32,48 +32,30 @@
 int
 main(int argc, char * argv[])
 {
-  std::vector<std::string> meshes = { "roll-10k", "roll-100k", "roll-1M", "dome-10k" };
-  std::vector<std::string> methods = { "lscm", "arap" };
-  std::string              csvPath;
-  size_t                   maxArap = 200000;
+  vu::FlatteningBenchmarkOptions options{ { "roll-10k", "roll-100k", "roll-1M", "dome-10k" }, { "lscm", "arap" }, "" };
+  size_t                         maxArap = 200000;
   for (int a = 1; a < argc; ++a)
   {
     const std::string arg = argv[a];
-    if (arg == "--meshes" && a + 1 < argc)
+    if (vu::ReadFlatteningBenchmarkOption(argc, argv, a, options))
     {
-      meshes = vu::SplitList(argv[++a]);
+      continue;
     }
-    else if (arg == "--methods" && a + 1 < argc)
-    {
-      methods = vu::SplitList(argv[++a]);
-    }
-    else if (arg == "--csv" && a + 1 < argc)
-    {
-      csvPath = argv[++a];
-    }
-    else if (arg == "--max-arap" && a + 1 < argc)
+    if (arg == "--max-arap" && a + 1 < argc)
     {
       maxArap = std::stoul(argv[++a]);
     }
     else
     {
-      std::cerr << "usage: vuCgalFlatteningBenchmark [--meshes LIST] [--methods lscm,arap] [--csv FILE] "
-                   "[--max-arap N]"
-                << std::endl;
-      return 2;
+      return vu::FlatteningBenchmarkUsage("vuCgalFlatteningBenchmark", "lscm,arap", "[--max-arap N]");
     }
   }
-  std::ofstream file;
-  if (!csvPath.empty())
-  {
-    file.open(csvPath);
-  }
-  std::ostream & out = csvPath.empty() ? std::cout : file;
-  vu::WriteFlatteningCsvHeader(out);
-  for (const std::string & meshName : meshes)
+  std::ofstream  file;
+  std::ostream & out = vu::OpenFlatteningCsv(options.CsvPath, file);
+  for (const std::string & meshName : options.Meshes)
   {
     const itk::SheetMesh surface = vu::BenchmarkMesh(meshName);
-    for (const std::string & method : methods)
+    for (const std::string & method : options.Methods)
     {
       if (method == "arap" && surface.GetNumberOfPoints() > maxArap)
       {

@@ -124,48 +124,34 @@ RunItkParameterization(std::ostream &                                           
 int
 main(int argc, char * argv[])
 {
-  std::vector<std::string> meshes = { "roll-10k", "roll-100k", "roll-1M", "dome-10k" };
-  std::vector<std::string> methods = { "implicit", "explicit", "itk" };
-  std::string              csvPath;
-  bool                     quick = false;
+  vu::FlatteningBenchmarkOptions options{ { "roll-10k", "roll-100k", "roll-1M", "dome-10k" },
+                                          { "implicit", "explicit", "itk" },
+                                          "" };
+  bool                           quick = false;
   for (int a = 1; a < argc; ++a)
   {
     const std::string arg = argv[a];
-    if (arg == "--meshes" && a + 1 < argc)
+    if (vu::ReadFlatteningBenchmarkOption(argc, argv, a, options))
     {
-      meshes = vu::SplitList(argv[++a]);
+      continue;
     }
-    else if (arg == "--methods" && a + 1 < argc)
-    {
-      methods = vu::SplitList(argv[++a]);
-    }
-    else if (arg == "--csv" && a + 1 < argc)
-    {
-      csvPath = argv[++a];
-    }
-    else if (arg == "--quick")
+    if (arg == "--quick")
     {
       quick = true;
-      meshes = { "roll-1k", "dome-400" };
+      options.Meshes = { "roll-1k", "dome-400" };
     }
     else
     {
-      std::cerr << "usage: vuFlatteningBenchmark [--meshes LIST] [--methods implicit,explicit,itk] [--csv FILE] "
-                   "[--quick]"
-                << std::endl;
-      return 2;
+      return vu::FlatteningBenchmarkUsage("vuFlatteningBenchmark", "implicit,explicit,itk", "[--quick]");
     }
   }
-  std::ofstream file;
-  if (!csvPath.empty())
-  {
-    file.open(csvPath);
-  }
-  std::ostream & out = csvPath.empty() ? std::cout : file;
-  vu::WriteFlatteningCsvHeader(out);
-  auto wants = [&](const std::string & m) { return std::find(methods.begin(), methods.end(), m) != methods.end(); };
+  std::ofstream  file;
+  std::ostream & out = vu::OpenFlatteningCsv(options.CsvPath, file);
+  auto           wants = [&](const std::string & m) {
+    return std::find(options.Methods.begin(), options.Methods.end(), m) != options.Methods.end();
+  };
 
-  for (const std::string & meshName : meshes)
+  for (const std::string & meshName : options.Meshes)
   {
     const itk::SheetMesh                surface = vu::BenchmarkMesh(meshName);
     const bool                          roll = meshName.rfind("roll", 0) == 0;

@@ -213,11 +213,7 @@ FlattenedTextureImageFilter<TImage, TOutputImage, TMesh>::GenerateData()
   stackOutput->SetBufferedRegion(stackOutput->GetRequestedRegion());
   stackOutput->Allocate();
   const TextureLayers layers = this->MakeLayers();
-  // Some interpolators precompute from their image (B-spline coefficients): only when it changed.
-  if (m_Interpolator->GetInputImage() != volume || m_Interpolator->GetMTime() < volume->GetMTime())
-  {
-    m_Interpolator->SetInputImage(volume);
-  }
+  LayeredVolumeSampler<TImage>::ConnectInterpolator(m_Interpolator, volume);
   const LayeredVolumeSampler<TImage> sampler(volume, m_Interpolator, layers);
 
   const SizeValueType   columns = m_PixelMap.Size[0];

@@ -70,11 +70,7 @@ LayeredTextureMeshFilter<TInputMesh, TImage, TOutputMesh>::GenerateData()
   sheet.Validate("LayeredTextureMeshFilter: input mesh");
   const std::vector<double> normals = sheet.ComputeVertexNormals();
   const TextureLayers       layers = this->MakeLayers();
-  // Some interpolators precompute from their image (B-spline coefficients): only when it changed.
-  if (m_Interpolator->GetInputImage() != volume || m_Interpolator->GetMTime() < volume->GetMTime())
-  {
-    m_Interpolator->SetInputImage(volume);
-  }
+  LayeredVolumeSampler<TImage>::ConnectInterpolator(m_Interpolator, volume);
   const LayeredVolumeSampler<TImage> sampler(volume, m_Interpolator, layers);
 
   const SizeValueType        numberOfPoints = sheet.GetNumberOfPoints();

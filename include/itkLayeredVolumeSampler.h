@@ -53,6 +53,12 @@ public:
 
   LayeredVolumeSampler(const TImage * volume, const InterpolatorType * interpolator, const TextureLayers & layers);
 
+  /** Gives interpolator the volume before a sampler is made of them, only when it holds
+   * another image or the volume changed since: some interpolators precompute from their
+   * image (B-spline coefficients). */
+  static void
+  ConnectInterpolator(InterpolatorType * interpolator, const TImage * volume);
+
   /** Writes one sample per layer into samples (GetNumberOfLayers() floats) and returns
    * how many of them fell outside the volume and were clamped. */
   unsigned int

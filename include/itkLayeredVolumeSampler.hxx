@@ -65,6 +65,16 @@ LayeredVolumeSampler<TImage>::LayeredVolumeSampler(const TImage *           volu
 }
 
 template <typename TImage>
+void
+LayeredVolumeSampler<TImage>::ConnectInterpolator(InterpolatorType * interpolator, const TImage * volume)
+{
+  if (interpolator->GetInputImage() != volume || interpolator->GetMTime() < volume->GetMTime())
+  {
+    interpolator->SetInputImage(volume);
+  }
+}
+
+template <typename TImage>
 inline float
 LayeredVolumeSampler<TImage>::Trilinear(const double index[3]) const
 {

@@ -120,6 +120,29 @@ CheckTexture(const TextureType * texture, const char * function)
     itkGenericExceptionMacro(<< "LayerStackTexture::" << function << ": the texture is not fully buffered");
   }
 }
+
+// Checks the texture and a length of `function` named `what` (physical units; 0 allowed).
+void
+CheckTextureAndLength(const TextureType * texture, double length, const char * function, const char * what)
+{
+  CheckTexture(texture, function);
+  detail::CheckLayerParameter(length, true, function, what);
+}
+
+// `statistic` of the ranks of a checked texture's finite pixels; 0 when fewer than 2 are
+// finite.
+template <typename TStatistic>
+double
+FiniteStatistic(const TextureType * texture, const char * function, TStatistic statistic)
+{
+  CheckTexture(texture, function);
+  const detail::FiniteRanks ranks = TextureRanks(texture);
+  if (ranks.GetCount() < 2)
+  {
+    return 0.0;
+  }
+  return statistic(ranks);
+}
 } // namespace
 
 namespace detail {
@@ -173,16 +196,12 @@ LayerStackTexture::Combine(const LayerStackType * stack,
 double
 LayerStackTexture::InkContrast(const TextureType * texture)
 {
-  CheckTexture(texture, "InkContrast");
-  const detail::FiniteRanks ranks = TextureRanks(texture);
-  if (ranks.GetCount() < 2)
-  {
-    return 0.0;
-  }
-  const auto   values = ranks.Quantiles({ 0.99, 0.5 });
-  const double top = values[0], median = values[1];
-  const double spread = Spread(ranks, median);
-  return spread > 0.0 ? (top - median) / spread : 0.0;
+  return FiniteStatistic(texture, "InkContrast", [](const detail::FiniteRanks & ranks) {
+    const auto   values = ranks.Quantiles({ 0.99, 0.5 });
+    const double top = values[0], median = values[1];
+    const double spread = Spread(ranks, median);
+    return spread > 0.0 ? (top - median) / spread : 0.0;
+  });
 }
 
 LayerStackTexture::TextureType::Pointer
@@ -250,13 +269,8 @@ LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigm
 double
 LayerStackTexture::NoiseSpread(const TextureType * texture)
 {
-  CheckTexture(texture, "NoiseSpread");
-  const detail::FiniteRanks ranks = TextureRanks(texture);
-  if (ranks.GetCount() < 2)
-  {
-    return 0.0;
-  }
-  return Spread(ranks, ranks.Quantile(0.5));
+  return FiniteStatistic(
+    texture, "NoiseSpread", [](const detail::FiniteRanks & ranks) { return Spread(ranks, ranks.Quantile(0.5)); });
 }
 
 std::vector<double>
@@ -282,8 +296,7 @@ LayerStackTexture::Quantiles(const TextureType * texture, const std::vector<doub
 LayerStackTexture::TextureType::Pointer
 LayerStackTexture::Smooth(const TextureType * texture, double sigma)
 {
-  CheckTexture(texture, "Smooth");
-  detail::CheckLayerParameter(sigma, true, "Smooth", "sigma");
+  CheckTextureAndLength(texture, sigma, "Smooth", "sigma");
   auto          result = NewTexture(texture);
   const auto    size = texture->GetBufferedRegion().GetSize();
   const size_t  n = texture->GetBufferedRegion().GetNumberOfPixels();
@@ -374,8 +387,7 @@ LayerStackTexture::Smooth(const TextureType * texture, double sigma)
 LayerStackTexture::TextureType::Pointer
 LayerStackTexture::Median(const TextureType * texture, double radius)
 {
-  CheckTexture(texture, "Median");
-  detail::CheckLayerParameter(radius, true, "Median", "the radius");
+  CheckTextureAndLength(texture, radius, "Median", "the radius");
   auto          result = NewTexture(texture);
   const auto    size = texture->GetBufferedRegion().GetSize();
   const float * in = texture->GetBufferPointer();
@@ -497,8 +509,7 @@ LayerStackTexture::Median(const TextureType * texture, double radius)
 LayerStackTexture::TextureType::Pointer
 LayerStackTexture::EdgePreservingSmooth(const TextureType * texture, double domainSigma, double rangeSigma)
 {
-  CheckTexture(texture, "EdgePreservingSmooth");
-  detail::CheckLayerParameter(domainSigma, true, "EdgePreservingSmooth", "the domain sigma");
+  CheckTextureAndLength(texture, domainSigma, "EdgePreservingSmooth", "the domain sigma");
   detail::CheckLayerParameter(rangeSigma, false, "EdgePreservingSmooth", "the range sigma");
   const float * begin = texture->GetBufferPointer();
   const float * end = begin + texture->GetBufferedRegion().GetNumberOfPixels();
@@ -523,8 +534,7 @@ LayerStackTexture::EdgePreservingSmooth(const TextureType * texture, double doma
 LayerStackTexture::TextureType::Pointer
 LayerStackTexture::Deconvolve(const TextureType * texture, double psfSigma, double regularization)
 {
-  CheckTexture(texture, "Deconvolve");
-  detail::CheckLayerParameter(psfSigma, true, "Deconvolve", "the PSF sigma");
+  CheckTextureAndLength(texture, psfSigma, "Deconvolve", "the PSF sigma");
   detail::CheckLayerParameter(regularization, false, "Deconvolve", "the regularization");
   const detail::FiniteRanks ranks = TextureRanks(texture);
   if (psfSigma == 0.0 || ranks.GetCount() == 0)
@@ -577,8 +587,7 @@ LayerStackTexture::ScanBlurSigma(double psfFWHM, double voxelSize)
 LayerStackTexture::TextureType::Pointer
 LayerStackTexture::TrimBorder(const TextureType * texture, double width)
 {
-  CheckTexture(texture, "TrimBorder");
-  detail::CheckLayerParameter(width, true, "TrimBorder", "the width");
+  CheckTextureAndLength(texture, width, "TrimBorder", "the width");
   auto          result = NewTexture(texture);
   const float * in = texture->GetBufferPointer();
   float *       out = result->GetBufferPointer();

@@ -420,12 +420,13 @@ TextureFidelityCalculator::Compute()
     refinement.push_back(shrink);
   }
   refinement.push_back(1);
-  for (Candidate & candidate : candidates)
-  {
+  // Aligns the candidate again from its transform at the given shrink levels and keeps the
+  // result when it scores higher.
+  const auto refine = [&](Candidate & candidate, const std::vector<unsigned int> & levels) {
     TransformType::Pointer refined = AlignTexture(reference,
                                                   textures[candidate.Texture],
                                                   candidate.Transform,
-                                                  refinement,
+                                                  levels,
                                                   Stage::GradientDescent,
                                                   m_NumberOfIterations);
     Score                  score = Evaluate(reference, textures[candidate.Texture], refined);
@@ -434,23 +435,16 @@ TextureFidelityCalculator::Compute()
       candidate.Transform = refined;
       candidate.Result = std::move(score);
     }
+  };
+  for (Candidate & candidate : candidates)
+  {
+    refine(candidate, refinement);
     // The shrunk, smoothed levels can lead away from the optimum of the full-resolution
     // images (fine strokes blur into blobs there): polish the kept transform at the two
     // finest levels as well.
     if (refinement.size() > 2)
     {
-      TransformType::Pointer polished = AlignTexture(reference,
-                                                     textures[candidate.Texture],
-                                                     candidate.Transform,
-                                                     { 2, 1 },
-                                                     Stage::GradientDescent,
-                                                     m_NumberOfIterations);
-      Score                  polishedScore = Evaluate(reference, textures[candidate.Texture], polished);
-      if (polishedScore.NCC > candidate.Result.NCC)
-      {
-        candidate.Transform = polished;
-        candidate.Result = std::move(polishedScore);
-      }
+      refine(candidate, { 2, 1 });
     }
   }
   const Candidate & best =

@@ -22,9 +22,9 @@
 #include "itkCTVolumeReader.h"
 #include "itkImageFileWriter.h"
 #include "itkImageRegionConstIterator.h"
-#include "itkImageRegionConstIteratorWithIndex.h"
 #include "itkImageRegionIteratorWithIndex.h"
 #include "vuExpectRefusal.h"
+#include "vuVoxelCount.h"
 
 #include <gtest/gtest.h>
 
@@ -118,15 +118,9 @@ protected:
     {
       EXPECT_NEAR(image->GetSpacing()[d], 1e-3 * v.VoxelMicrometres, 1e-9) << v.Id;
     }
-    size_t bad = 0;
-    for (itk::ImageRegionConstIteratorWithIndex<itk::CTVolumeReader::OutputImageType> it(
-           image, image->GetLargestPossibleRegion());
-         !it.IsAtEnd();
-         ++it)
-    {
-      const auto i = it.GetIndex();
-      bad += it.Get() != Value(v, i[0] + offset[0], i[1] + offset[1], i[2] + offset[2]) ? 1 : 0;
-    }
+    const size_t bad = vu::CountVoxelsNotHolding(image, [&](auto value, const auto & i) {
+      return value == Value(v, i[0] + offset[0], i[1] + offset[1], i[2] + offset[2]);
+    });
     EXPECT_EQ(bad, 0u) << v.Id;
     EXPECT_EQ(std::string(reader->GetInputKind()), "volume-cartographer volume");
   }

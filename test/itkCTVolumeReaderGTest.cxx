@@ -250,21 +250,13 @@ Box(long x, long y, long z, unsigned long sx, unsigned long sy, unsigned long sz
 ImageType::SpacingType
 Vec3(double x, double y, double z)
 {
-  ImageType::SpacingType v;
-  v[0] = x;
-  v[1] = y;
-  v[2] = z;
-  return v;
+  return vu::Triple<ImageType::SpacingType>(x, y, z);
 }
 
 ImageType::PointType
 Point3(double x, double y, double z)
 {
-  ImageType::PointType p;
-  p[0] = x;
-  p[1] = y;
-  p[2] = z;
-  return p;
+  return vu::Triple<ImageType::PointType>(x, y, z);
 }
 
 bool

@@ -61,6 +61,16 @@ MakeFilter(const itk::SheetMesh & surface, const itk::SheetMesh & flat, const vu
   return filter;
 }
 
+// The filter over the grid mesh (columns x 7) of a phantom sheet in its volume.
+template <typename TSheet>
+FilterType::Pointer
+MakeFilter(const TSheet & sheet, int columns, const vu::VolumeType * volume)
+{
+  itk::SheetMesh flat;
+  const auto     surface = vu::MakeSheetMesh(sheet, columns, 7, flat);
+  return MakeFilter(surface, flat, volume);
+}
+
 // Lets the developer look at a texture: written to the build tree, not compared.
 void
 WriteTexture(const FilterType * filter, const std::string & name)
@@ -68,37 +78,12 @@ WriteTexture(const FilterType * filter, const std::string & name)
   itk::WriteImage(filter->GetOutput(), std::string(VU_BINARY_DIR) + "/" + name + ".mha");
 }
 
-// A volume whose value is its z coordinate, and a horizontal sheet at z = 5 with normal +z:
-// every layer samples exactly z = 5 + offset.
-vu::VolumeType::Pointer
-RampVolume()
-{
-  auto         volume = vu::VolumeType::New();
-  itk::Size<3> size{ { 12, 10, 20 } };
-  volume->SetRegions(size);
-  vu::VolumeType::SpacingType spacing;
-  spacing.Fill(0.5);
-  volume->SetSpacing(spacing);
-  volume->Allocate();
-  for (itk::IndexValueType k = 0; k < 20; ++k)
-  {
-    for (itk::IndexValueType j = 0; j < 10; ++j)
-    {
-      for (itk::IndexValueType i = 0; i < 12; ++i)
-      {
-        volume->SetPixel({ { i, j, k } }, static_cast<float>(0.5 * k));
-      }
-    }
-  }
-  return volume;
-}
-
+// A horizontal sheet at z with normal +z in vu::RampVolume(), where every layer samples
+// exactly z + offset; flat receives the square moved to the origin.
 itk::SheetMesh
 HorizontalSquare(double z, itk::SheetMesh & flat)
 {
-  itk::SheetMesh mesh;
-  mesh.Points = { 1, 1, z, 4, 1, z, 4, 3.5, z, 1, 3.5, z };
-  mesh.Triangles = { 0, 1, 2, 0, 2, 3 };
+  const itk::SheetMesh mesh = vu::HorizontalSquare(z);
   flat = mesh;
   for (size_t i = 0; i < 4; ++i)
   {
@@ -146,7 +131,7 @@ TEST(FlattenedTextureImageFilter, LayersAndFiltersOnARamp)
 {
   itk::SheetMesh flat;
   const auto     surface = HorizontalSquare(5.0, flat);
-  auto           filter = MakeFilter(surface, flat, RampVolume());
+  auto           filter = MakeFilter(surface, flat, vu::RampVolume());
   filter->SetPixelSize(0.5);
   filter->SetNumberOfLayers(5);
   filter->SetLayerSpacing(0.5);
@@ -211,7 +196,7 @@ TEST(FlattenedTextureImageFilter, PixelMapIsReusedAcrossLayerSettings)
 {
   itk::SheetMesh flat;
   const auto     surface = HorizontalSquare(5.0, flat);
-  auto           filter = MakeFilter(surface, flat, RampVolume());
+  auto           filter = MakeFilter(surface, flat, vu::RampVolume());
   filter->Update();
   const int32_t * first = filter->GetPixelMap().Triangle.data();
   filter->SetFocus(1.0);
@@ -228,11 +213,7 @@ TEST(FlattenedTextureImageFilter, FlatSheetTextureMatchesInk)
 {
   const vu::TiltedPlane     plane;
   const vu::PhantomSettings settings; // ink through the whole thickness
-  const auto                volume = vu::MakeTiltedPlaneVolume(plane, settings);
-  itk::SheetMesh            flat;
-  const auto                surface = vu::MakeSheetMesh(
-    9, 7, [&plane](double u, double v) { return plane.At(u, v); }, flat);
-  auto filter = MakeFilter(surface, flat, volume);
+  auto                      filter = MakeFilter(plane, 9, vu::MakeTiltedPlaneVolume(plane, settings));
   filter->SetNumberOfLayers(3);
   filter->SetLayerSpacing(0.5);
   filter->Update();
@@ -259,13 +240,8 @@ TEST(FlattenedTextureImageFilter, FlatSheetTextureMatchesInk)
 
 TEST(FlattenedTextureImageFilter, MaxFilterRecoversInkOffTheMidSurface)
 {
-  const vu::TiltedPlane     plane;
-  const vu::PhantomSettings settings = vu::FaceInkSettings();
-  const auto                volume = vu::MakeTiltedPlaneVolume(plane, settings);
-  itk::SheetMesh            flat;
-  const auto                surface = vu::MakeSheetMesh(
-    9, 7, [&plane](double u, double v) { return plane.At(u, v); }, flat);
-  auto filter = MakeFilter(surface, flat, volume);
+  const vu::TiltedPlane plane;
+  auto                  filter = MakeFilter(plane, 9, vu::MakeTiltedPlaneVolume(plane, vu::FaceInkSettings()));
   filter->Update();
   const double single = Fidelity(filter);
   WriteTexture(filter, "FlattenedTexture_FaceInk_SingleLayer");
@@ -282,13 +258,8 @@ TEST(FlattenedTextureImageFilter, MaxFilterRecoversInkOffTheMidSurface)
 
 TEST(FlattenedTextureImageFilter, CylinderShellWithTrueFlattening)
 {
-  const vu::CylinderShell   shell;
-  const vu::PhantomSettings settings = vu::FaceInkSettings();
-  const auto                volume = vu::MakeCylinderShellVolume(shell, settings);
-  itk::SheetMesh            flat;
-  const auto                surface = vu::MakeSheetMesh(
-    61, 7, [&shell](double u, double v) { return shell.At(u, v); }, flat);
-  auto filter = MakeFilter(surface, flat, volume);
+  const vu::CylinderShell shell;
+  auto                    filter = MakeFilter(shell, 61, vu::MakeCylinderShellVolume(shell, vu::FaceInkSettings()));
   filter->SetNumberOfLayers(5);
   filter->SetLayerSpacing(0.5);
   filter->SetLayerFilter(Filter::Max);
@@ -314,7 +285,7 @@ TEST(FlattenedTextureImageFilter, BadInputThrows)
 {
   itk::SheetMesh flat;
   const auto     surface = HorizontalSquare(5.0, flat);
-  const auto     volume = RampVolume();
+  const auto     volume = vu::RampVolume();
 
   itk::SheetMesh otherTopology = flat;
   otherTopology.Triangles = { 0, 1, 3, 1, 2, 3 };
@@ -356,7 +327,7 @@ TEST(FlattenedTextureImageFilter, CountsDegenerateTrianglesZeroNormalsAndClamped
   flat.Points.insert(flat.Points.end(), { 1.5, 1.0, 0 });
   surface.Triangles.insert(surface.Triangles.end(), { 0, 4, 2 }); // 4 lies on the edge 0-2 in 3D, not in the flat
   flat.Triangles = surface.Triangles;
-  auto filter = MakeFilter(surface, flat, RampVolume());
+  auto filter = MakeFilter(surface, flat, vu::RampVolume());
   filter->Update();
   EXPECT_EQ(filter->GetNumberOfDegenerateTriangles(), 1u);
   EXPECT_GT(filter->GetNumberOfSheetPixels(), 0u);
@@ -366,7 +337,7 @@ TEST(FlattenedTextureImageFilter, CountsDegenerateTrianglesZeroNormalsAndClamped
   folded.Points = { 1, 1, 5, 4, 1, 5, 4, 3.5, 5 };
   folded.Triangles = { 0, 1, 2, 0, 2, 1 };
   itk::SheetMesh foldedFlat = folded;
-  filter = MakeFilter(folded, foldedFlat, RampVolume());
+  filter = MakeFilter(folded, foldedFlat, vu::RampVolume());
   filter->Update();
   EXPECT_EQ(filter->GetNumberOfSheetPixels(), 0u);
   EXPECT_GT(filter->GetNumberOfZeroNormalPixels(), 0u);
@@ -374,7 +345,7 @@ TEST(FlattenedTextureImageFilter, CountsDegenerateTrianglesZeroNormalsAndClamped
   // A sheet reaching out of the volume: samples clamped and counted, values finite.
   itk::SheetMesh outsideFlat;
   const auto     outside = HorizontalSquare(9.5, outsideFlat);
-  filter = MakeFilter(outside, outsideFlat, RampVolume());
+  filter = MakeFilter(outside, outsideFlat, vu::RampVolume());
   filter->SetNumberOfLayers(3);
   filter->SetLayerSpacing(1.0);
   EXPECT_NEAR(CentreValue(filter), (8.5 + 9.5 + 9.5) / 3.0, 1e-5);
@@ -385,7 +356,7 @@ TEST(FlattenedTextureImageFilter, AbortStopsTheFilter)
 {
   itk::SheetMesh flat;
   const auto     surface = HorizontalSquare(5.0, flat);
-  auto           filter = MakeFilter(surface, flat, RampVolume());
+  auto           filter = MakeFilter(surface, flat, vu::RampVolume());
   filter->SetPixelSize(0.01);
   auto abort = itk::CStyleCommand::New();
   abort->SetCallback([](itk::Object * caller, const itk::EventObject &, void *) {

@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "itkFlatteningDistortionCalculator.h"
 #include "vuTestHelpers.h"
+#include "vuTestMeshes.h"
 
 #include "gtest/gtest.h"
 
@@ -40,26 +41,9 @@ CylinderPatch(double radius, double angle, int columns, int rows, double height,
       flat.Points.insert(flat.Points.end(), { radius * theta, z, 0.0 });
     }
   }
-  for (int r = 0; r + 1 < rows; ++r)
-  {
-    for (int c = 0; c + 1 < columns; ++c)
-    {
-      const uint32_t a = r * columns + c, b = a + 1, d = a + columns, e = d + 1;
-      mesh.Triangles.insert(mesh.Triangles.end(), { a, b, e, a, e, d });
-    }
-  }
+  mesh.Triangles = vu::GridTriangles(rows, columns);
   flat.Triangles = mesh.Triangles;
   return mesh;
-}
-
-itk::FlatteningDistortionCalculator::Pointer
-Measure(const itk::SheetMesh & surface, const itk::SheetMesh & flat)
-{
-  auto calculator = itk::FlatteningDistortionCalculator::New();
-  calculator->SetSurfaceMesh(surface);
-  calculator->SetFlatMesh(flat);
-  calculator->Compute();
-  return calculator;
 }
 } // namespace
 
@@ -79,7 +63,7 @@ TEST(FlatteningDistortionCalculator, FlatInputHasNoDistortion)
   {
     lifted.Points[3 * i + 2] = 3.0;
   }
-  auto c = Measure(lifted, flat);
+  auto c = vu::MeasureDistortion(lifted, flat);
   EXPECT_NEAR(c->GetEdgeStrainMax(), 0.0, 1e-12);
   EXPECT_NEAR(c->GetAreaDistortion(), 0.0, 1e-12);
   EXPECT_NEAR(c->GetTotalAreaRatio(), 1.0, 1e-12);
@@ -95,7 +79,7 @@ TEST(FlatteningDistortionCalculator, CylinderUnrollingIsNearlyIsometric)
   itk::SheetMesh flat;
   // Chords of a 10-unit radius over 0.05 rad differ from arcs by about 1e-4 relative.
   itk::SheetMesh surface = CylinderPatch(10.0, 2.0, 41, 5, 4.0, flat);
-  auto           c = Measure(surface, flat);
+  auto           c = vu::MeasureDistortion(surface, flat);
   EXPECT_LT(c->GetEdgeStrainP95(), 2e-4);
   EXPECT_LT(c->GetAreaDistortion(), 2e-4);
   EXPECT_EQ(c->GetNumberOfFlippedTriangles(), 0u);
@@ -110,7 +94,7 @@ TEST(FlatteningDistortionCalculator, UniformScaleGivesKnownStrainAndStretch)
   {
     v *= 1.1;
   }
-  auto c = Measure(surface, flat);
+  auto c = vu::MeasureDistortion(surface, flat);
   EXPECT_NEAR(c->GetEdgeStrainMean(), 0.1, 1e-12);
   EXPECT_NEAR(c->GetEdgeStrainP95(), 0.1, 1e-12);
   EXPECT_NEAR(c->GetAreaDistortion(), 0.21, 1e-12);
@@ -128,7 +112,7 @@ TEST(FlatteningDistortionCalculator, CountsFlippedTriangles)
   // Fold one interior vertex across its neighbours: the triangles around it flip.
   const size_t v = 1 * 4 + 1;
   flat.Points[3 * v] = flat.Points[3 * (v + 1)] + 1.0;
-  auto c = Measure(surface, flat);
+  auto c = vu::MeasureDistortion(surface, flat);
   EXPECT_GT(c->GetNumberOfFlippedTriangles(), 0u);
   EXPECT_LT(c->GetNumberOfFlippedTriangles(), surface.GetNumberOfTriangles() / 2);
   EXPECT_GT(c->GetEdgeStrainMax(), 0.1);

@@ -17,6 +17,8 @@
  *=========================================================================*/
 #include "itkLayerStackTexture.h"
 
+#include "vuTestHelpers.h"
+
 #include "gtest/gtest.h"
 
 #include <algorithm>
@@ -45,11 +47,7 @@ MakeStack(unsigned                                                   columns,
   auto                stack = StackType::New();
   StackType::SizeType size = { { columns, rows, layers } };
   stack->SetRegions(size);
-  StackType::SpacingType spacing;
-  spacing[0] = 0.5;
-  spacing[1] = 0.25;
-  spacing[2] = 1.0;
-  stack->SetSpacing(spacing);
+  stack->SetSpacing(vu::Triple<StackType::SpacingType>(0.5, 0.25, 1.0));
   stack->Allocate();
   for (unsigned k = 0; k < layers; ++k)
   {

@@ -30,33 +30,11 @@ using FilterType = itk::LayeredTextureMeshFilter<vu::MeshType, vu::VolumeType>;
 using Filter = itk::TextureLayersEnums::Filter;
 using Side = itk::TextureLayersEnums::Side;
 
-// A volume whose value is its z coordinate (0.5 mm voxels, z from 0 to 9.5 mm).
-vu::VolumeType::Pointer
-RampVolume()
-{
-  auto         volume = vu::VolumeType::New();
-  itk::Size<3> size{ { 12, 10, 20 } };
-  volume->SetRegions(size);
-  vu::VolumeType::SpacingType spacing;
-  spacing.Fill(0.5);
-  volume->SetSpacing(spacing);
-  volume->Allocate();
-  float * buffer = volume->GetBufferPointer();
-  for (itk::SizeValueType n = 0; n < 12 * 10 * 20; ++n)
-  {
-    buffer[n] = static_cast<float>(0.5 * (n / (12 * 10)));
-  }
-  return volume;
-}
-
-// A horizontal square at height z, normal +z.
+// vu::HorizontalSquare(z) as the filter's input mesh.
 vu::MeshType::Pointer
-HorizontalSquare(double z)
+SquareMesh(double z)
 {
-  itk::SheetMesh mesh;
-  mesh.Points = { 1, 1, z, 4, 1, z, 4, 3.5, z, 1, 3.5, z };
-  mesh.Triangles = { 0, 1, 2, 0, 2, 3 };
-  return itk::SheetMeshToMesh<vu::MeshType>(mesh);
+  return itk::SheetMeshToMesh<vu::MeshType>(vu::HorizontalSquare(z));
 }
 
 std::vector<float>
@@ -111,8 +89,8 @@ TEST(LayeredTextureMeshFilter, BasicObjectMethods)
 TEST(LayeredTextureMeshFilter, VertexValuesFollowTheLayers)
 {
   auto filter = FilterType::New();
-  filter->SetInput(HorizontalSquare(5.0));
-  filter->SetVolume(RampVolume());
+  filter->SetInput(SquareMesh(5.0));
+  filter->SetVolume(vu::RampVolume());
   filter->SetNumberOfLayers(5);
   filter->SetLayerSpacing(0.5);
   filter->SetFocus(-0.25);
@@ -138,9 +116,8 @@ TEST(LayeredTextureMeshFilter, MaxFilterRecoversInkOffTheMidSurface)
   const vu::PhantomSettings settings = vu::FaceInkSettings();
   const auto                volume = vu::MakeTiltedPlaneVolume(plane, settings);
   itk::SheetMesh            flat;
-  const itk::SheetMesh      sheet = vu::MakeSheetMesh(
-    81, 49, [&plane](double u, double v) { return plane.At(u, v); }, flat);
-  std::vector<double> ink;
+  const itk::SheetMesh      sheet = vu::MakeSheetMesh(plane, 81, 49, flat);
+  std::vector<double>       ink;
   for (size_t i = 0; i < flat.GetNumberOfPoints(); ++i)
   {
     ink.push_back(vu::InkAt(flat.Points[3 * i], flat.Points[3 * i + 1]) ? 1.0 : 0.0);
@@ -169,7 +146,7 @@ TEST(LayeredTextureMeshFilter, ZeroNormalsAndSamplesOutsideAreCounted)
   folded.Triangles = { 0, 1, 2, 0, 2, 1 };
   auto filter = FilterType::New();
   filter->SetInput(itk::SheetMeshToMesh<vu::MeshType>(folded));
-  filter->SetVolume(RampVolume());
+  filter->SetVolume(vu::RampVolume());
   for (const float value : Values(filter))
   {
     EXPECT_TRUE(std::isnan(value));
@@ -177,7 +154,7 @@ TEST(LayeredTextureMeshFilter, ZeroNormalsAndSamplesOutsideAreCounted)
   EXPECT_EQ(filter->GetNumberOfZeroNormalPoints(), 3u);
 
   // Above the volume: clamped onto its top face, counted.
-  filter->SetInput(HorizontalSquare(20.0));
+  filter->SetInput(SquareMesh(20.0));
   for (const float value : Values(filter))
   {
     EXPECT_NEAR(value, 9.5, 1e-5);
@@ -188,9 +165,9 @@ TEST(LayeredTextureMeshFilter, ZeroNormalsAndSamplesOutsideAreCounted)
 TEST(LayeredTextureMeshFilter, BadInputThrows)
 {
   auto filter = FilterType::New();
-  filter->SetInput(HorizontalSquare(5.0));
+  filter->SetInput(SquareMesh(5.0));
   EXPECT_THROW(filter->Update(), itk::ExceptionObject); // no volume
-  filter->SetVolume(RampVolume());
+  filter->SetVolume(vu::RampVolume());
   filter->SetNumberOfLayers(0);
   EXPECT_THROW(filter->Update(), itk::ExceptionObject);
   filter->SetNumberOfLayers(3);
@@ -215,7 +192,7 @@ TEST(LayeredTextureMeshFilter, AbortStopsTheFilter)
     flat);
   auto filter = FilterType::New();
   filter->SetInput(itk::SheetMeshToMesh<vu::MeshType>(sheet));
-  filter->SetVolume(RampVolume());
+  filter->SetVolume(vu::RampVolume());
   auto abort = itk::CStyleCommand::New();
   abort->SetCallback([](itk::Object * caller, const itk::EventObject &, void *) {
     static_cast<itk::ProcessObject *>(caller)->AbortGenerateDataOn();

@@ -20,6 +20,8 @@
 #include "itkBSplineInterpolateImageFunction.h"
 #include "itkImage.h"
 
+#include "vuTestHelpers.h"
+
 #include "gtest/gtest.h"
 
 #include <random>
@@ -38,16 +40,8 @@ RandomVolume()
   auto                   volume = VolumeType::New();
   VolumeType::RegionType region({ { 3, -2, 5 } }, { { 9, 7, 6 } });
   volume->SetRegions(region);
-  VolumeType::SpacingType spacing;
-  spacing[0] = 0.5;
-  spacing[1] = 0.75;
-  spacing[2] = 1.25;
-  volume->SetSpacing(spacing);
-  VolumeType::PointType origin;
-  origin[0] = 1.0;
-  origin[1] = -2.0;
-  origin[2] = 0.5;
-  volume->SetOrigin(origin);
+  volume->SetSpacing(vu::Triple<VolumeType::SpacingType>(0.5, 0.75, 1.25));
+  volume->SetOrigin(vu::Triple<VolumeType::PointType>(1.0, -2.0, 0.5));
   VolumeType::DirectionType direction;
   const double              c = std::cos(0.4), s = std::sin(0.4);
   direction.SetIdentity();

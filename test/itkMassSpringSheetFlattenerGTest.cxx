@@ -28,16 +28,6 @@
 #include <set>
 
 namespace {
-itk::FlatteningDistortionCalculator::Pointer
-Measure(const itk::SheetMesh & surface, const itk::SheetMesh & flat)
-{
-  auto calculator = itk::FlatteningDistortionCalculator::New();
-  calculator->SetSurfaceMesh(surface);
-  calculator->SetFlatMesh(flat);
-  calculator->Compute();
-  return calculator;
-}
-
 void
 PrintReport(const itk::MassSpringSheetFlattener & flattener, const itk::FlatteningDistortionCalculator * c)
 {
@@ -64,7 +54,7 @@ FlattenAndMeasure(itk::MassSpringSheetFlattener &             flattener,
 {
   flattener.SetParameters(parameters);
   const itk::SheetMesh result = flattener.Flatten(surface);
-  auto                 c = Measure(surface, result);
+  auto                 c = vu::MeasureDistortion(surface, result);
   PrintReport(flattener, c);
   if (flat != nullptr)
   {
@@ -221,7 +211,8 @@ TEST(MassSpringSheetFlattener, AnUnfinishedUnrollIsReportedNotHidden)
   itk::MassSpringSheetFlattener converged;
   const itk::SheetMesh          good = converged.Flatten(surface);
   EXPECT_TRUE(converged.GetReport().Warnings.empty());
-  EXPECT_EQ(converged.GetReport().FlippedTriangles, Measure(surface, good)->GetNumberOfFlippedTriangles());
+  EXPECT_EQ(converged.GetReport().FlippedTriangles,
+            vu::MeasureDistortion(surface, good)->GetNumberOfFlippedTriangles());
 
   itk::MassSpringFlatteningParameters parameters;
   parameters.MaximumStepsPerPhase = 3;
@@ -278,7 +269,7 @@ TEST(MassSpringSheetFlattener, ExplicitStepAboveTheBoundIsReportedAsDivergence)
   parameters.Integrator = itk::MassSpringIntegratorEnum::ImplicitEuler;
   flattener.SetParameters(parameters);
   const itk::SheetMesh flat = flattener.Flatten(surface);
-  EXPECT_LE(Measure(surface, flat)->GetEdgeStrainP95(), 0.005);
+  EXPECT_LE(vu::MeasureDistortion(surface, flat)->GetEdgeStrainP95(), 0.005);
 }
 
 TEST(MassSpringSheetFlattener, CallbackSeesEveryPhaseAndCanAbort)
@@ -390,7 +381,7 @@ TEST(MassSpringSheetFlattener, CallerEndsThePhasesAndResumesASavedState)
   const itk::SheetMesh flat = flattener.Flatten(surface);
   EXPECT_EQ(unrollSteps, 400u);
   EXPECT_EQ(flattener.GetReport().Phases.front().Steps, 400u);
-  const double p95 = Measure(surface, flat)->GetEdgeStrainP95();
+  const double p95 = vu::MeasureDistortion(surface, flat)->GetEdgeStrainP95();
   EXPECT_LE(p95, 0.005);
 
   // Resumed from step 200 of the unroll: the unroll restarts there (its first step moves
@@ -417,7 +408,7 @@ TEST(MassSpringSheetFlattener, CallerEndsThePhasesAndResumesASavedState)
   const itk::SheetMesh resumed = flattener.Flatten(surface);
   EXPECT_TRUE(firstStepChecked);
   EXPECT_EQ(flattener.GetReport().Phases.front().StopReason, "ended by the caller");
-  EXPECT_LE(Measure(surface, resumed)->GetEdgeStrainP95(), 0.005);
+  EXPECT_LE(vu::MeasureDistortion(surface, resumed)->GetEdgeStrainP95(), 0.005);
   // A flatten-phase resume skips the unroll.
   flattener.SetInitialState(Phase::Flatten, saved, {});
   flattener.Flatten(surface);

@@ -49,8 +49,7 @@ InkedShell()
     const vu::CylinderShell cylinder;
     Shell                   s;
     s.Volume = vu::MakeCylinderShellVolume(cylinder, vu::FaceInkSettings(), Voxel);
-    s.Surface = vu::MakeSheetMesh(
-      61, 7, [&cylinder](double u, double v) { return cylinder.At(u, v); }, s.Flat);
+    s.Surface = vu::MakeSheetMesh(cylinder, 61, 7, s.Flat);
     return s;
   }();
   return shell;

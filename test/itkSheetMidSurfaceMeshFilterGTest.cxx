@@ -26,6 +26,7 @@
 #include "itkSheetPhantomSource.h"
 #include "itkSheetSegmentationImageFilter.h"
 #include "vuTestHelpers.h"
+#include "vuTestMeshes.h"
 
 #include "gtest/gtest.h"
 
@@ -161,6 +162,23 @@ Measure(const std::string & preset, const PhantomResult & result)
               result.Warnings);
   return figures;
 }
+
+// The mesh flattened by the mass-spring flattener, with its distortion printed as the
+// figures of `name`.
+itk::FlatteningDistortionCalculator::Pointer
+FlattenAndReport(const itk::SheetMesh & mesh, const char * name)
+{
+  itk::MassSpringSheetFlattener flattener;
+  const itk::SheetMesh          flat = flattener.Flatten(mesh);
+  auto                          distortion = vu::MeasureDistortion(mesh, flat);
+  std::printf("[ figures  ] %s flattened: edge strain mean %.5f p95 %.5f max %.5f, flipped %lu\n",
+              name,
+              distortion->GetEdgeStrainMean(),
+              distortion->GetEdgeStrainP95(),
+              distortion->GetEdgeStrainMax(),
+              static_cast<unsigned long>(distortion->GetNumberOfFlippedTriangles()));
+  return distortion;
+}
 } // namespace
 
 TEST(SheetMidSurfaceMeshFilter, BasicObjectMethods)
@@ -213,17 +231,7 @@ TEST(SheetMidSurfaceMeshFilter, StandardRollIsAccurateAndFlattens)
   result.Geometry.Project(&result.Mesh.Points[0], s0, w0, d0);
   EXPECT_LT(s0, 0.1 * result.Geometry.GetSheetLength());
 
-  itk::MassSpringSheetFlattener flattener;
-  const itk::SheetMesh          flat = flattener.Flatten(result.Mesh);
-  auto                          distortion = itk::FlatteningDistortionCalculator::New();
-  distortion->SetSurfaceMesh(result.Mesh);
-  distortion->SetFlatMesh(flat);
-  distortion->Compute();
-  std::printf("[ figures  ] standard flattened: edge strain mean %.5f p95 %.5f max %.5f, flipped %lu\n",
-              distortion->GetEdgeStrainMean(),
-              distortion->GetEdgeStrainP95(),
-              distortion->GetEdgeStrainMax(),
-              static_cast<unsigned long>(distortion->GetNumberOfFlippedTriangles()));
+  const auto distortion = FlattenAndReport(result.Mesh, "standard");
   EXPECT_LT(distortion->GetEdgeStrainP95(), 0.01);
   // Slices aligned along the sheet keep the grid developable enough not to crease.
   EXPECT_EQ(distortion->GetNumberOfFlippedTriangles(), 0u);
@@ -498,19 +506,8 @@ TEST(SheetMidSurfaceMeshFilter, EveryOtherPresetMeshFlattens)
 {
   for (const char * preset : { "tight", "squashed", "folded", "canvas-medical", "papyrus-microct" })
   {
-    const PhantomResult           result = SegmentPhantom(preset);
-    itk::MassSpringSheetFlattener flattener;
-    const itk::SheetMesh          flat = flattener.Flatten(result.Mesh);
-    auto                          distortion = itk::FlatteningDistortionCalculator::New();
-    distortion->SetSurfaceMesh(result.Mesh);
-    distortion->SetFlatMesh(flat);
-    distortion->Compute();
-    std::printf("[ figures  ] %s flattened: edge strain mean %.5f p95 %.5f max %.5f, flipped %lu\n",
-                preset,
-                distortion->GetEdgeStrainMean(),
-                distortion->GetEdgeStrainP95(),
-                distortion->GetEdgeStrainMax(),
-                static_cast<unsigned long>(distortion->GetNumberOfFlippedTriangles()));
+    const PhantomResult result = SegmentPhantom(preset);
+    const auto          distortion = FlattenAndReport(result.Mesh, preset);
     EXPECT_LT(distortion->GetEdgeStrainP95(), 0.01) << preset;
     EXPECT_EQ(distortion->GetNumberOfFlippedTriangles(), 0u) << preset;
   }

@@ -18,6 +18,7 @@
 #include "itkFlatteningDistortionCalculator.h"
 #include "itkSheetPhantomGeometry.h"
 #include "vuTestHelpers.h"
+#include "vuTestMeshes.h"
 
 #include "gtest/gtest.h"
 
@@ -89,10 +90,7 @@ ExpectIsometricMesh(const Geometry & g, double spacing)
   ASSERT_TRUE(mesh.IsGridStructured());
   ASSERT_TRUE(itk::HaveSameTopology(mesh, flat));
   EXPECT_EQ(mesh.GetNumberOfPoints(), static_cast<size_t>(mesh.GridRows) * mesh.GridColumns);
-  auto calculator = itk::FlatteningDistortionCalculator::New();
-  calculator->SetSurfaceMesh(mesh);
-  calculator->SetFlatMesh(flat);
-  calculator->Compute();
+  auto calculator = vu::MeasureDistortion(mesh, flat);
   // Chords of the curved sheet are shorter than the arcs by about (spacing * curvature)^2 / 24.
   const double k = 1.0 / g.GetMinimumCurvatureRadius();
   EXPECT_LT(calculator->GetEdgeStrainP95(), spacing * spacing * k * k / 24.0 + 1e-9);

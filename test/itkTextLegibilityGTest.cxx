@@ -27,8 +27,13 @@
 namespace {
 using Legibility = itk::TextLegibility;
 
+using InkType = itk::SheetPhantomGeometry::InkImageType;
+
+// The sentence the reading tests render and read.
+const std::string Sentence = "THE QUICK BROWN FOX";
+
 // Ink image of a short sentence rendered by the phantom source (no volume is made).
-const itk::SheetPhantomGeometry::InkImageType *
+const InkType *
 RenderInk(itk::SheetPhantomSource * source, const std::string & text)
 {
   source->SetText(text);
@@ -36,14 +41,28 @@ RenderInk(itk::SheetPhantomSource * source, const std::string & text)
   return source->GetGeometry().GetInkImage();
 }
 
-// The ink image placed at `offset` on an image of `size` filled with `fill`.
-itk::SheetPhantomGeometry::InkImageType::Pointer
-Placed(const itk::SheetPhantomGeometry::InkImageType *           ink,
-       const itk::SheetPhantomGeometry::InkImageType::SizeType & size,
-       const long                                                offset[2],
-       float                                                     fill)
+// The ink image of Sentence, and its size.
+struct SentenceInk
 {
-  using InkType = itk::SheetPhantomGeometry::InkImageType;
+  itk::SheetPhantomSource::Pointer Source = itk::SheetPhantomSource::New();
+  const InkType *                  Image = RenderInk(Source, Sentence);
+  const InkType::SizeType          Size = Image->GetLargestPossibleRegion().GetSize();
+};
+
+// Reads image with the truth text `text` and expects tesseract to read that text.
+void
+ExpectReadBack(Legibility * legibility, const InkType * image, const std::string & text)
+{
+  legibility->SetImage(image);
+  legibility->SetTruthText(text);
+  legibility->Compute();
+  EXPECT_EQ(Legibility::NormalizeText(legibility->GetRecognizedText()), text);
+}
+
+// The ink image placed at `offset` on an image of `size` filled with `fill`.
+InkType::Pointer
+Placed(const InkType * ink, const InkType::SizeType & size, const long offset[2], float fill)
+{
   const auto inner = ink->GetLargestPossibleRegion().GetSize();
   auto       placed = InkType::New();
   placed->SetRegions(size);
@@ -112,17 +131,13 @@ TEST(TextLegibility, ReadsRenderedText)
   {
     GTEST_SKIP() << "tesseract is not installed";
   }
-  auto              source = itk::SheetPhantomSource::New();
-  const std::string text = "THE QUICK BROWN FOX";
-  legibility->SetImage(RenderInk(source, text));
-  legibility->SetTruthText(text);
-  legibility->Compute();
-  EXPECT_EQ(Legibility::NormalizeText(legibility->GetRecognizedText()), text);
+  const SentenceInk sentence;
+  ExpectReadBack(legibility, sentence.Image, Sentence);
   EXPECT_EQ(legibility->GetCharacterErrorRate(), 0.0);
 
   // Dark ink on a bright sheet reads the same with InkIsBright off.
-  const auto * ink = source->GetGeometry().GetInkImage();
-  auto         dark = itk::SheetPhantomGeometry::InkImageType::New();
+  const InkType * ink = sentence.Image;
+  auto            dark = InkType::New();
   dark->CopyInformation(ink);
   dark->SetRegions(ink->GetLargestPossibleRegion());
   dark->Allocate();
@@ -130,10 +145,8 @@ TEST(TextLegibility, ReadsRenderedText)
   {
     dark->GetBufferPointer()[i] = 1.0f - ink->GetBufferPointer()[i];
   }
-  legibility->SetImage(dark);
   legibility->InkIsBrightOff();
-  legibility->Compute();
-  EXPECT_EQ(Legibility::NormalizeText(legibility->GetRecognizedText()), text);
+  ExpectReadBack(legibility, dark, Sentence);
 }
 
 // An unwrapped texture is NaN off the sheet: those pixels are background, not ink, and
@@ -145,18 +158,11 @@ TEST(TextLegibility, NaNPixelsAreBackground)
   {
     GTEST_SKIP() << "tesseract is not installed";
   }
-  auto              source = itk::SheetPhantomSource::New();
-  const std::string text = "THE QUICK BROWN FOX";
-  const auto *      ink = RenderInk(source, text);
-  using InkType = itk::SheetPhantomGeometry::InkImageType;
-  const auto        inner = ink->GetLargestPossibleRegion().GetSize();
+  const SentenceInk ink;
   const long        frame[2] = { 40, 40 };
-  InkType::SizeType size = { { inner[0] + 2 * frame[0], inner[1] + 2 * frame[1] } };
-  auto              framed = Placed(ink, size, frame, std::numeric_limits<float>::quiet_NaN());
-  legibility->SetImage(framed);
-  legibility->SetTruthText(text);
-  legibility->Compute();
-  EXPECT_EQ(Legibility::NormalizeText(legibility->GetRecognizedText()), text);
+  InkType::SizeType size = { { ink.Size[0] + 2 * frame[0], ink.Size[1] + 2 * frame[1] } };
+  auto              framed = Placed(ink.Image, size, frame, std::numeric_limits<float>::quiet_NaN());
+  ExpectReadBack(legibility, framed, Sentence);
   EXPECT_EQ(legibility->GetCharacterErrorRate(), 0.0);
 
   framed->FillBuffer(std::numeric_limits<float>::quiet_NaN());
@@ -172,25 +178,18 @@ TEST(TextLegibility, ImageTooLongForTesseractIsScaledToFit)
   {
     GTEST_SKIP() << "tesseract is not installed";
   }
-  auto              source = itk::SheetPhantomSource::New();
-  const std::string text = "THE QUICK BROWN FOX";
-  const auto *      ink = RenderInk(source, text);
-  using InkType = itk::SheetPhantomGeometry::InkImageType;
-  const auto inner = ink->GetLargestPossibleRegion().GetSize();
-  const long length = 20000;
-  ASSERT_LT(static_cast<long>(inner[0]), length);
-  InkType::SizeType size = { { static_cast<itk::SizeValueType>(length), inner[1] } };
+  const SentenceInk ink;
+  const long        length = 20000;
+  ASSERT_LT(static_cast<long>(ink.Size[0]), length);
+  InkType::SizeType size = { { static_cast<itk::SizeValueType>(length), ink.Size[1] } };
   const long        middle[2] = { length / 2, 0 };
-  legibility->SetImage(Placed(ink, size, middle, 0.0f));
-  legibility->SetTruthText(text);
-  legibility->Compute();
-  EXPECT_EQ(Legibility::NormalizeText(legibility->GetRecognizedText()), text);
+  ExpectReadBack(legibility, Placed(ink.Image, size, middle, 0.0f), Sentence);
   EXPECT_NEAR(legibility->GetAppliedScale(),
               static_cast<double>(Legibility::TesseractLargestSide - 32) / static_cast<double>(length),
               1e-9);
 
   // An image that fits keeps the upscale factor.
-  legibility->SetImage(ink);
+  legibility->SetImage(ink.Image);
   legibility->Compute();
   EXPECT_EQ(legibility->GetAppliedScale(), legibility->GetUpscaleFactor());
 }

@@ -27,6 +27,8 @@
 #include "itkImageRegionIteratorWithIndex.h"
 #include "itkZarrImageIO.h"
 #include "vuExpectRefusal.h"
+#include "vuTestHelpers.h"
+#include "vuVoxelCount.h"
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -261,16 +263,10 @@ TEST(ZarrImageIO, CTVolumeReaderReadsZarrWithItsGeometryAndARegionOfInterest)
     // The region of interest is indexed from 0: voxel i holds the store's voxel roi + i.
     const auto * image = reader->GetOutput();
     EXPECT_EQ(image->GetLargestPossibleRegion().GetSize(), roi.GetSize());
-    size_t bad = 0;
-    for (itk::ImageRegionConstIteratorWithIndex<itk::CTVolumeReader::OutputImageType> it(
-           image, image->GetLargestPossibleRegion());
-         !it.IsAtEnd();
-         ++it)
-    {
-      const auto   i = it.GetIndex();
+    const size_t bad = vu::CountVoxelsNotHolding(image, [&](auto value, const auto & i) {
       const double expected = Expected(store, i[0] + roi.GetIndex(0), i[1] + roi.GetIndex(1), i[2] + roi.GetIndex(2));
-      bad += std::abs(it.Get() - expected) > 1e-5 * std::max(1.0, std::abs(expected)) ? 1 : 0;
-    }
+      return !(std::abs(value - expected) > 1e-5 * std::max(1.0, std::abs(expected)));
+    });
     EXPECT_EQ(bad, 0u) << store["name"];
     if (ome)
     {
@@ -445,11 +441,7 @@ TEST(ZarrImageIO, WrittenStoresReadBackVoxelByVoxelWithTheirGeometry)
     rewrite->SetFileName(StoreDirectory() + "/again.zarr");
     rewrite->Update();
     again->SetOrigin(ImageType::PointType{ { { 1.5, -2.0, 3.0 } } });
-    ImageType::SpacingType spacing;
-    spacing[0] = 0.5;
-    spacing[1] = 0.25;
-    spacing[2] = 2.0;
-    again->SetSpacing(spacing);
+    again->SetSpacing(vu::Triple<ImageType::SpacingType>(0.5, 0.25, 2.0));
     rewrite->Modified();
     rewrite->Update();
     auto                     io = itk::ZarrImageIO::New();

@@ -35,4 +35,18 @@
     }(),                                                                                                               \
     EXIT_SUCCESS)
 
+namespace vu {
+/** An ITK spacing, point or vector of three coordinates (TTriple: its type). */
+template <typename TTriple>
+TTriple
+Triple(double x, double y, double z)
+{
+  TTriple t;
+  t[0] = x;
+  t[1] = y;
+  t[2] = z;
+  return t;
+}
+} // namespace vu
+
 #endif

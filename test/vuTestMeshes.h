@@ -18,13 +18,44 @@
 #ifndef vuTestMeshes_h
 #define vuTestMeshes_h
 
+#include "itkFlatteningDistortionCalculator.h"
 #include "itkSheetMesh.h"
 
 #include <array>
 #include <cmath>
 #include <functional>
+#include <vector>
 
 namespace vu {
+/** The triangles of a grid of rows x columns points numbered row by row, two a cell:
+ * (a, b, e) and (a, e, d) for the cell whose corners are a, its next column b, its next
+ * row d and e, so that the normal is (along a row) x (along a column). */
+inline std::vector<uint32_t>
+GridTriangles(int rows, int columns)
+{
+  std::vector<uint32_t> triangles;
+  for (int r = 0; r + 1 < rows; ++r)
+  {
+    for (int c = 0; c + 1 < columns; ++c)
+    {
+      const uint32_t a = r * columns + c, b = a + 1, d = a + columns, e = d + 1;
+      triangles.insert(triangles.end(), { a, b, e, a, e, d });
+    }
+  }
+  return triangles;
+}
+
+/** The distortion of flat as the flattening of surface, computed. */
+inline itk::FlatteningDistortionCalculator::Pointer
+MeasureDistortion(const itk::SheetMesh & surface, const itk::SheetMesh & flat)
+{
+  auto calculator = itk::FlatteningDistortionCalculator::New();
+  calculator->SetSurfaceMesh(surface);
+  calculator->SetFlatMesh(flat);
+  calculator->Compute();
+  return calculator;
+}
+
 /** Grid mesh (rows along the axis z, columns along a planar curve given by arc length)
  * with its exact unrolling (arc length, z) in flat. The curve is sampled densely and
  * resampled at equal arc length. */
@@ -73,14 +104,7 @@ ExtrudedCurveMesh(const std::function<void(double, double &, double &)> & curve,
       }
     }
   }
-  for (int r = 0; r + 1 < rows; ++r)
-  {
-    for (int c = 0; c + 1 < columns; ++c)
-    {
-      const uint32_t a = r * columns + c, b = a + 1, d = a + columns, e = d + 1;
-      mesh.Triangles.insert(mesh.Triangles.end(), { a, b, e, a, e, d });
-    }
-  }
+  mesh.Triangles = GridTriangles(rows, columns);
   if (flat)
   {
     flat->Triangles = mesh.Triangles;
@@ -124,14 +148,7 @@ SquareGridMesh(int n, const std::function<std::array<double, 3>(int, int)> & poi
       mesh.GridIndex.insert(mesh.GridIndex.end(), { r, c });
     }
   }
-  for (int r = 0; r + 1 < n; ++r)
-  {
-    for (int c = 0; c + 1 < n; ++c)
-    {
-      const uint32_t a = r * n + c, b = a + 1, d = a + n, e = d + 1;
-      mesh.Triangles.insert(mesh.Triangles.end(), { a, b, e, a, e, d });
-    }
-  }
+  mesh.Triangles = GridTriangles(n, n);
   return mesh;
 }
 

@@ -23,6 +23,7 @@
 #include "itkSheetMesh.h"
 #include "itkSheetMeshAdaptor.h"
 #include "itkSmoothingRecursiveGaussianImageFilter.h"
+#include "vuTestMeshes.h"
 
 #include <cmath>
 #include <functional>
@@ -35,6 +36,37 @@ namespace vu {
 using VolumeType = itk::Image<float, 3>;
 using TextureType = itk::Image<float, 2>;
 using MeshType = itk::Mesh<float, 3>;
+
+/** A 12 x 10 x 20 volume of 0.5 mm voxels whose value is its z coordinate (0 to 9.5 mm):
+ * every layer of a horizontal sheet with normal +z samples its own height. */
+inline VolumeType::Pointer
+RampVolume()
+{
+  auto         volume = VolumeType::New();
+  itk::Size<3> size{ { 12, 10, 20 } };
+  volume->SetRegions(size);
+  VolumeType::SpacingType spacing;
+  spacing.Fill(0.5);
+  volume->SetSpacing(spacing);
+  volume->Allocate();
+  float * buffer = volume->GetBufferPointer();
+  for (itk::SizeValueType n = 0; n < 12 * 10 * 20; ++n)
+  {
+    buffer[n] = static_cast<float>(0.5 * (n / (12 * 10)));
+  }
+  return volume;
+}
+
+/** A horizontal square at height z inside RampVolume(), corners (1, 1) and (4, 3.5),
+ * normal +z. */
+inline itk::SheetMesh
+HorizontalSquare(double z)
+{
+  itk::SheetMesh mesh;
+  mesh.Points = { 1, 1, z, 4, 1, z, 4, 3.5, z, 1, 3.5, z };
+  mesh.Triangles = { 0, 1, 2, 0, 2, 3 };
+  return mesh;
+}
 
 /** Ink of the test sheet, in sheet coordinates (u, v) in mm on a 40 x 24 mm sheet: bars
  * of several widths, two blocks and an "F" and an "L" (asymmetric, so that a mirrored or
@@ -219,14 +251,7 @@ MakeSheetMesh(int                                                          colum
       flat.Points.insert(flat.Points.end(), { u, v, 0.0 });
     }
   }
-  for (int r = 0; r + 1 < rows; ++r)
-  {
-    for (int c = 0; c + 1 < columns; ++c)
-    {
-      const uint32_t a = r * columns + c, b = a + 1, d = a + columns, e = d + 1;
-      mesh.Triangles.insert(mesh.Triangles.end(), { a, b, e, a, e, d });
-    }
-  }
+  mesh.Triangles = GridTriangles(rows, columns);
   flat.Triangles = mesh.Triangles;
   return mesh;
 }
@@ -344,6 +369,16 @@ MakeCylinderShellVolume(const CylinderShell & shell, const PhantomSettings & set
     voxel,
     [&shell](const double x[3], double & d, double & u, double & v) { return shell.Coordinates(x, d, u, v); },
     settings);
+}
+
+/** The grid mesh (columns x rows) of a phantom sheet's mid-surface (TiltedPlane,
+ * CylinderShell: anything with At(u, v)); flat receives its exact flattening. */
+template <typename TSheet>
+inline itk::SheetMesh
+MakeSheetMesh(const TSheet & sheet, int columns, int rows, itk::SheetMesh & flat)
+{
+  return MakeSheetMesh(
+    columns, rows, [&sheet](double u, double v) { return sheet.At(u, v); }, flat);
 }
 } // namespace vu
 

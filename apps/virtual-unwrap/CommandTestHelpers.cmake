@@ -12,3 +12,25 @@ function(vu_expect_failure subcommand name pattern)
     message(FATAL_ERROR "${name}: expected one error line matching '${pattern}', got:\n${error}")
   endif()
 endfunction()
+
+# Requires every file named after dir to exist in dir.
+function(vu_expect_files dir)
+  foreach(file ${ARGN})
+    if(NOT EXISTS ${dir}/${file})
+      message(FATAL_ERROR "missing ${file}")
+    endif()
+  endforeach()
+endfunction()
+
+# Sets out to the time stamp and MD5 of every file below dir: equal lists before and after a
+# command tell that it left those files untouched.
+function(vu_file_stamps dir out)
+  file(GLOB_RECURSE files ${dir}/*)
+  set(stamps "")
+  foreach(f ${files})
+    file(TIMESTAMP ${f} t)
+    file(MD5 ${f} h)
+    list(APPEND stamps "${t}${h}")
+  endforeach()
+  set(${out} "${stamps}" PARENT_SCOPE)
+endfunction()

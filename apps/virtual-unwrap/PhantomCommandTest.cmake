@@ -12,11 +12,8 @@ execute_process(COMMAND ${TOOL} phantom standard -o ${WORK}/good --format mha --
 if(NOT result EQUAL 0)
   message(FATAL_ERROR "standard phantom failed: ${error}")
 endif()
-foreach(file volume.mha ground_truth_ink.png ground_truth.json ground_truth_surface.obj ground_truth_flat.obj)
-  if(NOT EXISTS ${WORK}/good/${file})
-    message(FATAL_ERROR "missing ${file}")
-  endif()
-endforeach()
+vu_expect_files(${WORK}/good volume.mha ground_truth_ink.png ground_truth.json ground_truth_surface.obj
+  ground_truth_flat.obj)
 file(READ ${WORK}/good/ground_truth.json json)
 string(JSON text GET "${json}" text)
 string(JSON voxels GET "${json}" volume voxels)

@@ -11,30 +11,22 @@
 file(REMOVE_RECURSE ${WORK})
 file(MAKE_DIRECTORY ${WORK})
 
+include(${CMAKE_CURRENT_LIST_DIR}/CommandTestHelpers.cmake)
+
 execute_process(COMMAND ${TOOL} phantom ${PRESET} -o ${WORK}/phantom --format dicom
   RESULT_VARIABLE result ERROR_VARIABLE error OUTPUT_QUIET)
 if(NOT result EQUAL 0)
   message(FATAL_ERROR "phantom ${PRESET} failed: ${error}")
 endif()
-file(GLOB_RECURSE before ${WORK}/phantom/*)
-set(stamps "")
-foreach(f ${before})
-  file(TIMESTAMP ${f} t)
-  file(MD5 ${f} h)
-  list(APPEND stamps "${t}${h}")
-endforeach()
+vu_file_stamps(${WORK}/phantom stamps)
 
 execute_process(COMMAND ${TOOL} unwrap ${WORK}/phantom/volume -o ${WORK}/out --ground-truth ${WORK}/phantom
   ${EXTRA_ARGS} RESULT_VARIABLE result OUTPUT_VARIABLE output ERROR_VARIABLE error)
 if(NOT result EQUAL 0)
   message(FATAL_ERROR "unwrap of ${PRESET} failed: ${error}")
 endif()
-foreach(file texture.png texture.tif mask.png layers.tif surface.obj surface.vtp flat.obj flat.mtl preview.png
-    report.json)
-  if(NOT EXISTS ${WORK}/out/${file})
-    message(FATAL_ERROR "missing ${file}")
-  endif()
-endforeach()
+vu_expect_files(${WORK}/out texture.png texture.tif mask.png layers.tif surface.obj surface.vtp flat.obj flat.mtl
+  preview.png report.json)
 file(GLOB leftovers ${WORK}/out/.partial*)
 if(leftovers)
   message(FATAL_ERROR "temporary files left in the output: ${leftovers}")
@@ -97,18 +89,11 @@ if(NOT nSurface EQUAL nFlat OR nSurface EQUAL 0)
 endif()
 
 # The input is untouched.
-file(GLOB_RECURSE after ${WORK}/phantom/*)
-set(stampsAfter "")
-foreach(f ${after})
-  file(TIMESTAMP ${f} t)
-  file(MD5 ${f} h)
-  list(APPEND stampsAfter "${t}${h}")
-endforeach()
+vu_file_stamps(${WORK}/phantom stampsAfter)
 if(NOT stamps STREQUAL stampsAfter)
   message(FATAL_ERROR "the input changed")
 endif()
 
-include(${CMAKE_CURRENT_LIST_DIR}/CommandTestHelpers.cmake)
 file(MAKE_DIRECTORY ${WORK}/empty)
 vu_expect_failure(unwrap missing "no such file" ${WORK}/no-such-scan -o ${WORK}/bad1 -q)
 vu_expect_failure(unwrap empty "empty" ${WORK}/empty -o ${WORK}/bad2 -q)
