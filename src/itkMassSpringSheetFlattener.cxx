@@ -528,6 +528,33 @@ HangsFlat(const MassSpringSystem & system, const SheetMesh & simulated, double t
 }
 } // namespace
 
+namespace {
+// What a caller should not miss: every phase that stopped at its step limit, and the
+// triangles of the flat mesh turned over.
+void
+AddWarnings(MassSpringFlatteningReport & report, size_t triangles)
+{
+  for (const auto & phase : report.Phases)
+  {
+    if (phase.StopReason != "converged")
+    {
+      std::ostringstream text;
+      text << "the " << ToString(phase.Name) << " phase stopped at its " << phase.StopReason << " (" << phase.Steps
+           << " steps) before it converged";
+      report.Warnings.push_back(text.str());
+    }
+  }
+  if (report.FlippedTriangles > 0)
+  {
+    std::ostringstream text;
+    text << report.FlippedTriangles << " of " << triangles
+         << " triangles of the flat mesh are turned over: the sheet lies folded onto itself there, and its "
+            "texture does not read there";
+    report.Warnings.push_back(text.str());
+  }
+}
+} // namespace
+
 SheetMesh
 MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
 {
@@ -662,25 +689,8 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
     m_Report.RowBend = FlatFrame::StraightenRows(surface, flat);
   }
   FlatFrame::Normalise(flat);
-  for (const auto & phase : m_Report.Phases)
-  {
-    if (phase.StopReason != "converged")
-    {
-      std::ostringstream text;
-      text << "the " << ToString(phase.Name) << " phase stopped at its " << phase.StopReason << " (" << phase.Steps
-           << " steps) before it converged";
-      m_Report.Warnings.push_back(text.str());
-    }
-  }
   m_Report.FlippedTriangles = FlatFrame::TurnedOverTriangles(flat);
-  if (m_Report.FlippedTriangles > 0)
-  {
-    std::ostringstream text;
-    text << m_Report.FlippedTriangles << " of " << flat.GetNumberOfTriangles()
-         << " triangles of the flat mesh are turned over: the sheet lies folded onto itself there, and its "
-            "texture does not read there";
-    m_Report.Warnings.push_back(text.str());
-  }
+  AddWarnings(m_Report, flat.GetNumberOfTriangles());
   m_Report.Seconds = Seconds(start);
   return flat;
 }

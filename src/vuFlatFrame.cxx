@@ -99,31 +99,24 @@ SignedArea2(const std::vector<double> & p, const SheetMesh & mesh, size_t t)
 }
 } // namespace
 
+namespace {
+using Vec2 = Eigen::Vector2d;
+
+// The sheet's diameter across its rows in 3D: the median over rows of each row's bounding
+// box diagonal; 0 when no row has a point.
 double
-StraightenRows(const SheetMesh & surface, SheetMesh & flat)
+MedianRowDiameter(const SheetMesh & surface, const std::vector<int64_t> & at, size_t rows, size_t columns)
 {
-  if (!flat.IsGridStructured() || flat.GridColumns < 3 || flat.GridRows < 2 ||
-      surface.Points.size() != flat.Points.size())
-  {
-    return 0.0;
-  }
-  const std::vector<int64_t> at = CoarseToFine::GridLookup(flat);
-  const auto                 rows = static_cast<size_t>(flat.GridRows);
-  const auto                 columns = static_cast<size_t>(flat.GridColumns);
-  // The sheet's diameter across its rows in 3D (each row's bounding box, the median): a row
-  // that is not quite a straight line in the development (a slice a little oblique to the
-  // roll's axis undulates once a turn) keeps that shape, since only bends longer than the
-  // longest turn's circumference are taken out.
   std::vector<double> diameters;
   for (size_t r = 0; r < rows; ++r)
   {
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::max());
-    Eigen::Vector3d hi = -lo;
+    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max());
+    Vec3 hi = -lo;
     for (size_t c = 0; c < columns; ++c)
     {
       if (at[r * columns + c] >= 0)
       {
-        const Eigen::Vector3d q = PointOf(surface.Points, static_cast<size_t>(at[r * columns + c]));
+        const Vec3 q = PointOf(surface.Points, static_cast<size_t>(at[r * columns + c]));
         lo = lo.cwiseMin(q);
         hi = hi.cwiseMax(q);
       }
@@ -138,10 +131,84 @@ StraightenRows(const SheetMesh & surface, SheetMesh & flat)
     return 0.0;
   }
   std::nth_element(diameters.begin(), diameters.begin() + diameters.size() / 2, diameters.end());
-  const double diameter = diameters[diameters.size() / 2];
+  return diameters[diameters.size() / 2];
+}
+
+// The line a centre line follows at each of its points (arc lengths `arc`): a weighted
+// quadratic in arc length over a Gaussian window `sigma` wide, its value and unit slope at
+// the point (a straight-line fit would cut inside an arc, and more so at the ends, where
+// the window is one-sided). False where a fit is degenerate.
+bool
+FollowCentreLine(const std::vector<Vec2> &   centre,
+                 const std::vector<double> & arc,
+                 double                      sigma,
+                 std::vector<Vec2> &         origin,
+                 std::vector<Vec2> &         direction)
+{
+  const size_t columns = centre.size();
+  origin.assign(columns, Vec2::Zero());
+  direction.assign(columns, Vec2::Zero());
+  size_t lo = 0, hi = 0;
+  for (size_t c = 0; c < columns; ++c)
+  {
+    while (arc[c] - arc[lo] > 3.0 * sigma)
+    {
+      ++lo;
+    }
+    while (hi + 1 < columns && arc[hi + 1] - arc[c] <= 3.0 * sigma)
+    {
+      ++hi;
+    }
+    Eigen::Matrix3d             normal = Eigen::Matrix3d::Zero();
+    Eigen::Matrix<double, 3, 2> right = Eigen::Matrix<double, 3, 2>::Zero();
+    for (size_t k = lo; k <= hi; ++k)
+    {
+      const double a = (arc[k] - arc[c]) / sigma;
+      const Vec3   basis(1.0, a, a * a);
+      const double w = std::exp(-0.5 * a * a);
+      normal += w * basis * basis.transpose();
+      right += w * basis * centre[k].transpose();
+    }
+    const Eigen::LDLT<Eigen::Matrix3d> solver(normal);
+    if (solver.info() != Eigen::Success || !(std::abs(normal.determinant()) > 1e-12 * normal.trace()))
+    {
+      return false;
+    }
+    const Eigen::Matrix<double, 3, 2> fit = solver.solve(right);
+    origin[c] = fit.row(0).transpose();
+    direction[c] = fit.row(1).transpose();
+    if (!(direction[c].norm() > 1e-12))
+    {
+      return false;
+    }
+    direction[c].normalize();
+  }
+  return true;
+}
+} // namespace
+
+double
+StraightenRows(const SheetMesh & surface, SheetMesh & flat)
+{
+  if (!flat.IsGridStructured() || flat.GridColumns < 3 || flat.GridRows < 2 ||
+      surface.Points.size() != flat.Points.size())
+  {
+    return 0.0;
+  }
+  const std::vector<int64_t> at = CoarseToFine::GridLookup(flat);
+  const auto                 rows = static_cast<size_t>(flat.GridRows);
+  const auto                 columns = static_cast<size_t>(flat.GridColumns);
+  // The sheet's diameter across its rows: a row that is not quite a straight line in the
+  // development (a slice a little oblique to the roll's axis undulates once a turn) keeps
+  // that shape, since only bends longer than the longest turn's circumference go.
+  const double diameter = MedianRowDiameter(surface, at, rows, columns);
+  if (!(diameter > 0.0))
+  {
+    return 0.0;
+  }
   // The centre line: the mean point of each column over its rows, and its arc length.
-  std::vector<Eigen::Vector2d> centre(columns, Eigen::Vector2d::Zero());
-  std::vector<double>          across(columns, 0.0);
+  std::vector<Vec2>   centre(columns, Vec2::Zero());
+  std::vector<double> across(columns, 0.0);
   for (size_t c = 0; c < columns; ++c)
   {
     double              count = 0.0;
@@ -151,7 +218,7 @@ StraightenRows(const SheetMesh & surface, SheetMesh & flat)
       if (at[r * columns + c] >= 0)
       {
         const auto i = static_cast<size_t>(at[r * columns + c]);
-        centre[c] += Eigen::Vector2d(flat.Points[3 * i], flat.Points[3 * i + 1]);
+        centre[c] += Vec2(flat.Points[3 * i], flat.Points[3 * i + 1]);
         count += 1.0;
         points.push_back(i);
       }
@@ -162,7 +229,8 @@ StraightenRows(const SheetMesh & surface, SheetMesh & flat)
     }
     centre[c] /= count;
     const size_t first = points.front(), last = points.back();
-    across[c] = std::hypot(flat.Points[3 * last] - flat.Points[3 * first], flat.Points[3 * last + 1] - flat.Points[3 * first + 1]);
+    across[c] = std::hypot(flat.Points[3 * last] - flat.Points[3 * first],
+                           flat.Points[3 * last + 1] - flat.Points[3 * first + 1]);
   }
   std::vector<double> arc(columns, 0.0);
   for (size_t c = 1; c < columns; ++c)
@@ -176,49 +244,15 @@ StraightenRows(const SheetMesh & surface, SheetMesh & flat)
   {
     return 0.0;
   }
-  // The line the centre would follow: at each column, a weighted straight-line fit of the
-  // centre against arc length over a Gaussian window of pi times the sheet's diameter (and
-  // at least half the strip's width), so that only bends longer than a turn are taken out
-  // and the columns' own shape is kept. Its point and unit direction give the column's
-  // frame.
-  const double                 sigma = std::max(0.5 * width, Math::pi * diameter);
-  std::vector<Eigen::Vector2d> origin(columns), direction(columns);
-  size_t                       lo = 0, hi = 0;
-  for (size_t c = 0; c < columns; ++c)
+  // The line the centre follows, over a Gaussian window of pi times the sheet's diameter
+  // (and at least half the strip's width), so that only bends longer than a turn are taken
+  // out and the columns' own shape is kept. Its point and unit direction give each
+  // column's frame.
+  const double      sigma = std::max(0.5 * width, Math::pi * diameter);
+  std::vector<Vec2> origin, direction;
+  if (!FollowCentreLine(centre, arc, sigma, origin, direction))
   {
-    while (arc[c] - arc[lo] > 3.0 * sigma)
-    {
-      ++lo;
-    }
-    while (hi + 1 < columns && arc[hi + 1] - arc[c] <= 3.0 * sigma)
-    {
-      ++hi;
-    }
-    // Weighted quadratic in a / sigma: its value and slope at the column (a straight-line
-    // fit would cut inside an arc, and more so at the ends, where the window is one-sided).
-    Eigen::Matrix3d                  normal = Eigen::Matrix3d::Zero();
-    Eigen::Matrix<double, 3, 2>      right = Eigen::Matrix<double, 3, 2>::Zero();
-    for (size_t k = lo; k <= hi; ++k)
-    {
-      const double          a = (arc[k] - arc[c]) / sigma;
-      const Eigen::Vector3d basis(1.0, a, a * a);
-      const double          w = std::exp(-0.5 * a * a);
-      normal += w * basis * basis.transpose();
-      right += w * basis * centre[k].transpose();
-    }
-    const Eigen::LDLT<Eigen::Matrix3d> solver(normal);
-    if (solver.info() != Eigen::Success || !(std::abs(normal.determinant()) > 1e-12 * normal.trace()))
-    {
-      return 0.0;
-    }
-    const Eigen::Matrix<double, 3, 2> fit = solver.solve(right);
-    origin[c] = fit.row(0).transpose();
-    direction[c] = fit.row(1).transpose();
-    if (!(direction[c].norm() > 1e-12))
-    {
-      return 0.0;
-    }
-    direction[c].normalize();
+    return 0.0;
   }
   // The frame may turn by at most a tenth of a radian over half the strip's width: a sheet
   // bent more than that in its plane is not a slightly bent strip, and is left as it is.
@@ -232,11 +266,11 @@ StraightenRows(const SheetMesh & surface, SheetMesh & flat)
     }
   }
   // The bend taken out: the followed line's largest distance from its chord.
-  const Eigen::Vector2d chord = (origin.back() - origin.front()).normalized();
-  double                bend = 0.0;
+  const Vec2 chord = (origin.back() - origin.front()).normalized();
+  double     bend = 0.0;
   for (const auto & point : origin)
   {
-    const Eigen::Vector2d d = point - origin.front();
+    const Vec2 d = point - origin.front();
     bend = std::max(bend, std::abs(d.x() * chord.y() - d.y() * chord.x()));
   }
   // Each column's points in its frame: along the line by the followed line's own arc
@@ -249,16 +283,16 @@ StraightenRows(const SheetMesh & surface, SheetMesh & flat)
     {
       along += (origin[c] - origin[c - 1]).dot((direction[c] + direction[c - 1]).normalized());
     }
-    const Eigen::Vector2d t = direction[c];
-    const Eigen::Vector2d n(-t.y(), t.x());
+    const Vec2 t = direction[c];
+    const Vec2 n(-t.y(), t.x());
     for (size_t r = 0; r < rows; ++r)
     {
       if (at[r * columns + c] < 0)
       {
         continue;
       }
-      const auto            i = static_cast<size_t>(at[r * columns + c]);
-      const Eigen::Vector2d d = Eigen::Vector2d(flat.Points[3 * i], flat.Points[3 * i + 1]) - origin[c];
+      const auto i = static_cast<size_t>(at[r * columns + c]);
+      const Vec2 d = Vec2(flat.Points[3 * i], flat.Points[3 * i + 1]) - origin[c];
       flat.Points[3 * i] = along + d.dot(t);
       flat.Points[3 * i + 1] = d.dot(n);
     }
