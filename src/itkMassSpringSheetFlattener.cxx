@@ -686,7 +686,7 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   }
   if (p.StraightenRows != 0)
   {
-    m_Report.RowBend = FlatFrame::StraightenRows(surface, flat);
+    m_Report.RowBend = FlatFrame::StraightenRows(flat);
   }
   FlatFrame::Normalise(flat);
   m_Report.FlippedTriangles = FlatFrame::TurnedOverTriangles(flat);

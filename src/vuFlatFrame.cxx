@@ -102,38 +102,6 @@ SignedArea2(const std::vector<double> & p, const SheetMesh & mesh, size_t t)
 namespace {
 using Vec2 = Eigen::Vector2d;
 
-// The sheet's diameter across its rows in 3D: the median over rows of each row's bounding
-// box diagonal; 0 when no row has a point.
-double
-MedianRowDiameter(const SheetMesh & surface, const std::vector<int64_t> & at, size_t rows, size_t columns)
-{
-  std::vector<double> diameters;
-  for (size_t r = 0; r < rows; ++r)
-  {
-    Vec3 lo = Vec3::Constant(std::numeric_limits<double>::max());
-    Vec3 hi = -lo;
-    for (size_t c = 0; c < columns; ++c)
-    {
-      if (at[r * columns + c] >= 0)
-      {
-        const Vec3 q = PointOf(surface.Points, static_cast<size_t>(at[r * columns + c]));
-        lo = lo.cwiseMin(q);
-        hi = hi.cwiseMax(q);
-      }
-    }
-    if ((hi - lo).minCoeff() >= 0.0)
-    {
-      diameters.push_back((hi - lo).norm());
-    }
-  }
-  if (diameters.empty())
-  {
-    return 0.0;
-  }
-  std::nth_element(diameters.begin(), diameters.begin() + diameters.size() / 2, diameters.end());
-  return diameters[diameters.size() / 2];
-}
-
 // The line a centre line follows at each of its points (arc lengths `arc`): a weighted
 // quadratic in arc length over a Gaussian window `sigma` wide, its value and unit slope at
 // the point (a straight-line fit would cut inside an arc, and more so at the ends, where
@@ -191,24 +159,15 @@ FollowCentreLine(const std::vector<Vec2> &   centre,
 } // namespace
 
 double
-StraightenRows(const SheetMesh & surface, SheetMesh & flat)
+StraightenRows(SheetMesh & flat)
 {
-  if (!flat.IsGridStructured() || flat.GridColumns < 3 || flat.GridRows < 2 ||
-      surface.Points.size() != flat.Points.size())
+  if (!flat.IsGridStructured() || flat.GridColumns < 3 || flat.GridRows < 2)
   {
     return 0.0;
   }
   const std::vector<int64_t> at = CoarseToFine::GridLookup(flat);
   const auto                 rows = static_cast<size_t>(flat.GridRows);
   const auto                 columns = static_cast<size_t>(flat.GridColumns);
-  // The sheet's diameter across its rows: a row that is not quite a straight line in the
-  // development (a slice a little oblique to the roll's axis undulates once a turn) keeps
-  // that shape, since only bends longer than the longest turn's circumference go.
-  const double diameter = MedianRowDiameter(surface, at, rows, columns);
-  if (!(diameter > 0.0))
-  {
-    return 0.0;
-  }
   // The centre line: the mean point of each column over its rows, and its arc length.
   std::vector<Vec2>   centre(columns, Vec2::Zero());
   std::vector<double> across(columns, 0.0);
@@ -247,11 +206,10 @@ StraightenRows(const SheetMesh & surface, SheetMesh & flat)
   {
     return 0.0;
   }
-  // The line the centre follows, over a Gaussian window of pi times the sheet's diameter
-  // (and at least half the strip's width), so that only bends longer than a turn are taken
-  // out and the columns' own shape is kept. Its point and unit direction give each
-  // column's frame.
-  const double      sigma = std::max(0.5 * width, Math::pi * diameter);
+  // The line the centre follows, over a Gaussian window of half the strip's width, so
+  // that bends longer than the strip is wide are taken out and each column keeps its own
+  // shape. Its point and unit direction give each column's frame.
+  const double      sigma = 0.5 * width;
   std::vector<Vec2> origin, direction;
   if (!FollowCentreLine(centre, arc, sigma, origin, direction))
   {

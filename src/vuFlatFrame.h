@@ -54,17 +54,16 @@ ToPlane(const std::vector<double> & x,
  * folded about an axis develops into a strip whose rows (the slices across that axis) are
  * straight lines, but a long strip keeps a slow bend in its plane that its springs barely
  * resist (rows differing in length by some parts in a hundred thousand bend a strip 200
- * times longer than wide by millimetres). The centre line (each column's mean point) is
- * followed by a local straight-line fit over a Gaussian window of pi times the sheet's
- * diameter across its rows in `surface` (the 3D mesh, same grid), and each column is
- * carried into that line's frame: bends longer than the longest turn are taken out, the
- * undulation of a slice a little oblique to the roll's axis and each column's shape are
- * kept. Returns the bend taken out (the centre line's largest distance from its chord,
- * mesh units); 0 and the mesh unchanged for a mesh without a grid, or one bent in its
- * plane by more than a tenth of a radian over half its width (not a slightly bent
- * strip). */
+ * times longer than wide by millimetres), and the inner turns of a long roll come out with
+ * wiggles of some tenths of a millimetre. The centre line (each column's mean point) is
+ * followed by a local weighted quadratic over a Gaussian window of half the strip's
+ * width, and each column is carried into that line's frame: bends longer than the strip is
+ * wide are taken out, each column keeps its shape. Returns the bend taken out (the
+ * followed line's largest distance from its chord, mesh units); 0 and the mesh unchanged
+ * for a mesh without a grid, or one bent in its plane by more than a tenth of a radian
+ * over half its width (not a slightly bent strip). */
 double
-StraightenRows(const SheetMesh & surface, SheetMesh & flat);
+StraightenRows(SheetMesh & flat);
 
 /** The final frame of a flat mesh (z = 0): x along the sheet, triangles counter-clockwise
  * seen from +z, bounding box from (0, 0). On a grid mesh "along the sheet" is the mean

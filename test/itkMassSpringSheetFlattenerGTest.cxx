@@ -132,8 +132,7 @@ TEST(MassSpringSheetFlattener, CoarseToFineOnALargerRoll)
 // thousandth from one edge to the other, so the flat strip is an arc (sagitta about
 // epsilon L^2 / 8 = 4.9 mm over its 628 mm). Its rows come out straight and the bend taken
 // out is reported; with StraightenRows off the arc stays. A strip lying in a plane, bent
-// there into a ring (20 mm radius), keeps its shape: only bends longer than the sheet's
-// diameter times pi are taken out.
+// there into a ring (20 mm radius), keeps its shape: it is not a slightly bent strip.
 namespace {
 // The largest distance of a flat grid mesh's middle row from the straight line through
 // its ends.
