@@ -244,8 +244,6 @@ Evaluate(const PreparedImage & reference, const PreparedImage & texture, const T
   return score;
 }
 
-// Translation search on a coarse grid (exhaustive) or gradient descent of all four
-// similarity parameters, both on the correlation metric over the valid pixels.
 // The scale a start turned by `angle` begins with: the ratio of the two valid regions' sizes,
 // from their areas; for two long strips whose long axes the turn lines up, from their
 // lengths (the spread along the long axis) instead, which a border of a few pixels along
@@ -267,6 +265,8 @@ StartScale(const PreparedImage & reference, const PreparedImage & texture, doubl
   return std::sqrt(texture.Area / reference.Area);
 }
 
+// Translation search on a coarse grid (exhaustive) or gradient descent of all four
+// similarity parameters, both on the correlation metric over the valid pixels.
 enum class Stage
 {
   TranslationSearch,

@@ -18,8 +18,6 @@
 #include "vuFlatFrame.h"
 #include "vuCoarseGrid.h"
 
-#include "itkMath.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -173,24 +171,23 @@ StraightenRows(SheetMesh & flat)
   std::vector<double> across(columns, 0.0);
   for (size_t c = 0; c < columns; ++c)
   {
-    double              count = 0.0;
-    std::vector<size_t> points;
+    size_t count = 0, first = 0, last = 0;
     for (size_t r = 0; r < rows; ++r)
     {
       if (at[r * columns + c] >= 0)
       {
         const auto i = static_cast<size_t>(at[r * columns + c]);
         centre[c] += Vec2(flat.Points[3 * i], flat.Points[3 * i + 1]);
-        count += 1.0;
-        points.push_back(i);
+        first = count == 0 ? i : first;
+        last = i;
+        ++count;
       }
     }
-    if (count < 2.0)
+    if (count < 2)
     {
       return 0.0;
     }
-    centre[c] /= count;
-    const size_t first = points.front(), last = points.back();
+    centre[c] /= static_cast<double>(count);
     across[c] = std::hypot(flat.Points[3 * last] - flat.Points[3 * first],
                            flat.Points[3 * last + 1] - flat.Points[3 * first + 1]);
   }
