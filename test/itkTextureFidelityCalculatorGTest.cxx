@@ -205,6 +205,57 @@ TEST(TextureFidelityCalculator, SmallRotationAndShiftAreRefined)
   EXPECT_NEAR(calculator->GetRotationDegrees(), -7.0, 1.0);
 }
 
+TEST(TextureFidelityCalculator, ALongStripWithANarrowerTextureStartsAtTheRightScale)
+{
+  // A strip 1200 mm long and 24 mm high (a long roll's flat sheet), written with strokes
+  // a few millimetres long; the texture shows the same strip at the same scale, but its top
+  // fifth is off the sheet (NaN), so that its area is 0.8 of the reference's.
+  constexpr double    pixel = 0.5, length = 1200.0, height = 24.0;
+  auto                reference = ImageType::New();
+  ImageType::SizeType size = { { static_cast<itk::SizeValueType>(length / pixel),
+                                 static_cast<itk::SizeValueType>(height / pixel) } };
+  reference->SetRegions(size);
+  ImageType::SpacingType spacing;
+  spacing.Fill(pixel);
+  reference->SetSpacing(spacing);
+  reference->Allocate();
+  reference->FillBuffer(0.0f);
+  std::mt19937                       generator(11);
+  std::uniform_int_distribution<int> column(0, static_cast<int>(size[0]) - 8);
+  std::uniform_int_distribution<int> row(2, static_cast<int>(size[1]) - 10);
+  std::uniform_int_distribution<int> extent(2, 8);
+  for (int stroke = 0; stroke < 1500; ++stroke)
+  {
+    const int  i0 = column(generator), j0 = row(generator);
+    const bool across = stroke % 2 == 0;
+    const int  w = across ? 1 + stroke % 3 : extent(generator), h = across ? extent(generator) : 1 + stroke % 3;
+    for (int j = j0; j < std::min<int>(j0 + h, size[1]); ++j)
+    {
+      for (int i = i0; i < std::min<int>(i0 + w, size[0]); ++i)
+      {
+        reference->SetPixel({ { i, j } }, 1.0f);
+      }
+    }
+  }
+  auto texture = ImageType::New();
+  texture->CopyInformation(reference);
+  texture->SetRegions(reference->GetLargestPossibleRegion());
+  texture->Allocate();
+  const itk::SizeValueType columns = size[0], offSheetFrom = size[1] * 4 / 5;
+  for (itk::SizeValueType k = 0; k < reference->GetBufferedRegion().GetNumberOfPixels(); ++k)
+  {
+    texture->GetBufferPointer()[k] =
+      k / columns >= offSheetFrom ? std::numeric_limits<float>::quiet_NaN() : reference->GetBufferPointer()[k];
+  }
+  const auto calculator = Measure(reference, texture);
+  std::cout << "long strip, texture 0.8 of its area: NCC " << calculator->GetNormalizedCrossCorrelation() << ", scale "
+            << calculator->GetScale() << std::endl;
+  // Started at the area ratio (sqrt(0.8), 11 % small), the strip's ends would lie 60 mm
+  // off among strokes that all look alike.
+  EXPECT_NEAR(calculator->GetScale(), 1.0, 0.002);
+  EXPECT_GE(calculator->GetNormalizedCrossCorrelation(), 0.95);
+}
+
 TEST(TextureFidelityCalculator, UnrelatedTextureScoresLow)
 {
   const auto ink = vu::MakeInkImage(0.25);
