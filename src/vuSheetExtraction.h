@@ -99,6 +99,7 @@ struct Extraction
   double                                             hs{ 0.0 }, hw{ 0.0 }; // grid spacings
   size_t                                             columns{ 0 };
   std::vector<Polyline>                              columnsOf; // per slice
+  double rollCentreOffset[2]{ 0.0, 0.0 };                       // spiral centre relative to the centroid line (mm)
 };
 } // namespace SheetTracing
 } // end namespace itk

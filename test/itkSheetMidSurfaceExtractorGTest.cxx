@@ -47,7 +47,12 @@ struct SpiralVolume
   size_t               Size[3]{ 80, 80, 8 };
   std::vector<uint8_t> Mask;
   std::vector<uint8_t> Data;
-  explicit SpiralVolume(size_t slices = 8, size_t gapFrom = 1000, size_t touchFrom = 0, size_t touchTo = 0)
+  // `twist`: the whole spiral turned by that angle (radians) per slice about its centre.
+  explicit SpiralVolume(size_t slices = 8,
+                        size_t gapFrom = 1000,
+                        size_t touchFrom = 0,
+                        size_t touchTo = 0,
+                        double twist = 0.0)
     : Size{ 80, 80, slices }
     , Mask(Size[0] * Size[1] * Size[2], 0)
   {
@@ -57,10 +62,10 @@ struct SpiralVolume
       {
         const double x = static_cast<double>(i) - 40.0, y = static_cast<double>(j) - 40.0;
         const double r = std::hypot(x, y);
-        double       phi = std::atan2(y, x);
-        phi = phi < 0.0 ? phi + 2.0 * Pi : phi;
         for (size_t k = 0; k < Size[2]; ++k)
         {
+          double phi = std::remainder(std::atan2(y, x) - twist * static_cast<double>(k), 2.0 * Pi);
+          phi = phi < 0.0 ? phi + 2.0 * Pi : phi;
           bool inside = false;
           for (int turn = 0; turn < 3; ++turn)
           {
@@ -245,6 +250,46 @@ TEST(SheetMidSurfaceExtractor, TouchingTurnsAreNotJumped)
   // Every vertex on its own turn (the turns lie 6 voxels apart); the pinch bends the second
   // turn by 3 voxels over 3 mesh columns, which the mesh follows to within 1.6 voxels.
   ExpectOnTheSpiral(mesh, 1.6, 2.0, 22.0);
+}
+
+TEST(SheetMidSurfaceExtractor, SlicesThatCannotBeTracedAreInterpolatedAlongTheTurns)
+{
+  // The spiral turns by 0.05 radian per slice, and slices 10 to 21 of 32 hold no sheet
+  // (untraceable): they are interpolated from slices 9 and 22, whose points at the same
+  // fraction of the sheet lie 0.65 radian apart. On the chords between them the mesh lay up
+  // to 3 voxels inside the turns; along the turns it stays on the sheet.
+  constexpr double twist = 0.05;
+  SpiralVolume     volume(32, 1000, 0, 0, twist);
+  const size_t     sliceSize = volume.Size[0] * volume.Size[1];
+  std::fill(volume.Mask.begin() + 10 * sliceSize, volume.Mask.begin() + 22 * sliceSize, 0);
+  itk::SheetMidSurfaceExtractor extractor;
+  const itk::SheetMesh          mesh = extractor.Extract(volume.View());
+  const auto &                  report = extractor.GetReport();
+  EXPECT_EQ(report.Method, itk::SheetSurfaceMethodEnum::Roll);
+  EXPECT_GE(report.InterpolatedSlices, 12u);
+  double largest = 0.0;
+  size_t interpolatedPoints = 0;
+  for (size_t p = 0; p < mesh.GetNumberOfPoints(); ++p)
+  {
+    const double z = mesh.Points[3 * p + 2];
+    const int    column = mesh.GridIndex[2 * p + 1];
+    if (column == 0 || column == mesh.GridColumns - 1 || z < 9.5 || z > 21.5)
+    {
+      continue;
+    }
+    ++interpolatedPoints;
+    const double x = mesh.Points[3 * p] - 40.0, y = mesh.Points[3 * p + 1] - 40.0;
+    double       phi = std::remainder(std::atan2(y, x) - twist * z, 2.0 * Pi);
+    phi = phi < 0.0 ? phi + 2.0 * Pi : phi;
+    double nearest = 1e9;
+    for (int turn = 0; turn < 3; ++turn)
+    {
+      nearest = std::min(nearest, std::abs(std::hypot(x, y) - (12.0 + 6.0 * (phi + 2.0 * Pi * turn) / (2.0 * Pi))));
+    }
+    largest = std::max(largest, nearest);
+  }
+  EXPECT_GT(interpolatedPoints, 0u);
+  EXPECT_LT(largest, 1.0); // the traced slices' points reach 0.7 voxel
 }
 
 TEST(SheetMidSurfaceExtractor, GridStepsNameAMeshThatJumpsATurn)
