@@ -41,6 +41,10 @@ using RollTracing::Median;
 
 // Slices at most by which the mesh reaches past the last well-traced slice along the axis.
 constexpr long EdgeSlices = 8;
+// How far (as a fraction of the turn spacing) the rows past the last well-traced slice may
+// follow the roll's trend along the axis away from that slice's curve: a third of the way
+// to the next turn.
+constexpr double EdgeTrendShift = 0.3;
 } // namespace
 
 SheetMesh
@@ -689,6 +693,14 @@ Extraction::BuildMesh()
   SheetMesh    mesh = BuildSheetGrid(columnsOf, firstGood, lastGood, sz, below, rows, rowSpacing, columns, agreement);
   if (method == SheetSurfaceMethodEnum::Roll)
   {
+    const double centre[2] = { m_Report.AxisCentre[0] + rollCentreOffset[0],
+                               m_Report.AxisCentre[1] + rollCentreOffset[1] };
+    ExtrapolateEdgeRows(mesh,
+                        static_cast<double>(firstGood) * sz,
+                        static_cast<double>(lastGood) * sz,
+                        centre,
+                        m_Report.AxisSlope,
+                        EdgeTrendShift * std::max(m_Report.TurnSpacing, m_Report.SheetThickness));
     OrientNormalsToAxis(mesh, m_Report.AxisCentre, m_Report.AxisSlope);
   }
   m_Report.SpacingAlongSheet = referenceLength / static_cast<double>(columns - 1);

@@ -142,6 +142,101 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
 }
 
 void
+ExtrapolateEdgeRows(SheetMesh &  mesh,
+                    double       zFirst,
+                    double       zLast,
+                    const double axisCentre[2],
+                    const double axisSlope[2],
+                    double       largestShift)
+{
+  const auto rows = static_cast<long>(mesh.GridRows);
+  const auto columns = static_cast<size_t>(mesh.GridColumns);
+  auto       point = [&](long r, size_t c) { return &mesh.Points[3 * (static_cast<size_t>(r) * columns + c)]; };
+  auto       rowZ = [&](long r) { return point(r, 0)[2]; };
+  long       inFirst = -1, inLast = -1;
+  for (long r = 0; r < rows; ++r)
+  {
+    if (rowZ(r) >= zFirst && rowZ(r) <= zLast)
+    {
+      inFirst = inFirst < 0 ? r : inFirst;
+      inLast = r;
+    }
+  }
+  // Column c at height z on the line through rows a and b: angle and radius about the axis.
+  auto predict = [&](long a, long b, size_t c, double z, double out[2]) {
+    double polar[2][2];
+    for (int i = 0; i < 2; ++i)
+    {
+      const double * q = point(i == 0 ? a : b, c);
+      const double   x = q[0] - axisCentre[0] - axisSlope[0] * q[2], y = q[1] - axisCentre[1] - axisSlope[1] * q[2];
+      polar[i][0] = std::atan2(y, x);
+      polar[i][1] = std::hypot(x, y);
+    }
+    const double t = (z - rowZ(a)) / (rowZ(a) - rowZ(b));
+    const double angle = polar[0][0] + t * std::remainder(polar[0][0] - polar[1][0], 2.0 * M_PI);
+    const double radius = std::max(0.0, polar[0][1] + t * (polar[0][1] - polar[1][1]));
+    out[0] = axisCentre[0] + axisSlope[0] * z + radius * std::cos(angle);
+    out[1] = axisCentre[1] + axisSlope[1] * z + radius * std::sin(angle);
+  };
+  // The row inside the traced range, beyond `from` in `direction`, at least `distance`
+  // from it (so that a trend is not amplified), or the last one there is.
+  auto beyond = [&](long from, double distance, long direction) {
+    long r = from + direction;
+    while (r + direction >= inFirst && r + direction <= inLast && std::abs(rowZ(r) - rowZ(from)) < distance)
+    {
+      r += direction;
+    }
+    return r;
+  };
+  auto extrapolate = [&](long edge, long near, long direction) {
+    const double distance = std::abs(rowZ(edge) - rowZ(near));
+    const long   far = beyond(near, distance, direction), farther = beyond(far, distance, direction);
+    if (far == farther || far < inFirst || far > inLast || farther < inFirst || farther > inLast)
+    {
+      return;
+    }
+    // Kept only where the trend would have foretold the near row from the two beyond it
+    // better than the far row's curve does (a radius that swings along the axis has turned).
+    std::vector<double> trendMiss(columns), curveMiss(columns);
+    for (size_t c = 0; c < columns; ++c)
+    {
+      double foretold[2];
+      predict(far, farther, c, rowZ(near), foretold);
+      trendMiss[c] = std::hypot(foretold[0] - point(near, c)[0], foretold[1] - point(near, c)[1]);
+      curveMiss[c] = std::hypot(point(far, c)[0] - point(near, c)[0], point(far, c)[1] - point(near, c)[1]);
+    }
+    std::nth_element(trendMiss.begin(), trendMiss.begin() + columns / 2, trendMiss.end());
+    std::nth_element(curveMiss.begin(), curveMiss.begin() + columns / 2, curveMiss.end());
+    if (trendMiss[columns / 2] >= curveMiss[columns / 2])
+    {
+      return;
+    }
+    for (size_t c = 0; c < columns; ++c)
+    {
+      double * e = point(edge, c);
+      double   target[2];
+      predict(near, far, c, e[2], target);
+      const double shift = std::hypot(target[0] - e[0], target[1] - e[1]);
+      const double keep = shift > largestShift ? largestShift / shift : 1.0;
+      e[0] += keep * (target[0] - e[0]);
+      e[1] += keep * (target[1] - e[1]);
+    }
+  };
+  if (inFirst < 0 || inLast <= inFirst)
+  {
+    return;
+  }
+  for (long r = 0; r < inFirst; ++r)
+  {
+    extrapolate(r, inFirst, +1);
+  }
+  for (long r = inLast + 1; r < rows; ++r)
+  {
+    extrapolate(r, inLast, -1);
+  }
+}
+
+void
 OrientNormalsToAxis(SheetMesh & mesh, const double axisCentre[2], const double axisSlope[2])
 {
   // Make the normals point to the roll axis (the inside face).

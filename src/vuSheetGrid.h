@@ -42,6 +42,23 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
                size_t                        columns,
                double                        agreement);
 
+/** Rows of a roll's grid that lie beyond the traced slices (z < zFirst or z > zLast: the
+ * sheet's faint edges along the axis, reached on the nearest traced slices' curve)
+ * continued along the roll's trend instead: angle and radius about the axis (through
+ * axisCentre at z = 0, drift axisSlope per mm of z) extrapolated linearly from the nearest
+ * row inside the range and the row inside at least as far from it as the edge row is, each
+ * point moved by at most `largestShift`. A roll's radius may change along its axis by a
+ * voxel over a few slices; where it swings back, the trend misleads, so the trend is
+ * followed only where it foretells the nearest row (from the two rows beyond it) better
+ * than the next row's curve does. */
+void
+ExtrapolateEdgeRows(SheetMesh &  mesh,
+                    double       zFirst,
+                    double       zLast,
+                    const double axisCentre[2],
+                    const double axisSlope[2],
+                    double       largestShift);
+
 /** Turns the mesh's triangles over unless their normals point, on the whole, to the axis
  * through axisCentre (at z = 0) with drift axisSlope per mm of z (the inside face of a roll). */
 void

@@ -47,12 +47,14 @@ struct SpiralVolume
   size_t               Size[3]{ 80, 80, 8 };
   std::vector<uint8_t> Mask;
   std::vector<uint8_t> Data;
-  // `twist`: the whole spiral turned by that angle (radians) per slice about its centre.
+  // `twist`: the whole spiral turned by that angle (radians) per slice about its centre;
+  // `taper`: its radius grown by that many voxels per slice.
   explicit SpiralVolume(size_t slices = 8,
                         size_t gapFrom = 1000,
                         size_t touchFrom = 0,
                         size_t touchTo = 0,
-                        double twist = 0.0)
+                        double twist = 0.0,
+                        double taper = 0.0)
     : Size{ 80, 80, slices }
     , Mask(Size[0] * Size[1] * Size[2], 0)
   {
@@ -71,7 +73,7 @@ struct SpiralVolume
           {
             const double theta = phi + 2.0 * Pi * turn;
             const double mid =
-              12.0 + 6.0 * theta / (2.0 * Pi) -
+              12.0 + taper * static_cast<double>(k) + 6.0 * theta / (2.0 * Pi) -
               Pinch(theta, static_cast<double>(k), static_cast<double>(touchFrom), static_cast<double>(touchTo));
             if (theta <= 2.5 * 2.0 * Pi && std::abs(r - mid) <= 1.5)
             {
@@ -290,6 +292,60 @@ TEST(SheetMidSurfaceExtractor, SlicesThatCannotBeTracedAreInterpolatedAlongTheTu
   }
   EXPECT_GT(interpolatedPoints, 0u);
   EXPECT_LT(largest, 1.0); // the traced slices' points reach 0.7 voxel
+}
+
+TEST(SheetMidSurfaceExtractor, RowsPastTheTracedSlicesFollowTheRollsTaper)
+{
+  // The spiral's radius grows by 0.4 voxel per slice; the first and last three of its 24
+  // slices hold only part of the sheet (theta mod 2 pi beyond 1.2 pi missing: the faint,
+  // broken edge of a sheet along the axis), so they are not traced and the mesh reaches
+  // over them from the traced ones, half a slice past the last. On the curve of the nearest
+  // traced slices the edge rows lay up to 2.1 voxels off the sheet; along the taper 1.2.
+  constexpr double taper = 0.4;
+  SpiralVolume     volume(24, 1000, 0, 0, 0.0, taper);
+  for (size_t k : { 0, 1, 2, 21, 22, 23 })
+  {
+    for (size_t j = 0; j < volume.Size[1]; ++j)
+    {
+      for (size_t i = 0; i < volume.Size[0]; ++i)
+      {
+        double phi = std::atan2(static_cast<double>(j) - 40.0, static_cast<double>(i) - 40.0);
+        phi = phi < 0.0 ? phi + 2.0 * Pi : phi;
+        if (phi > 1.2 * Pi)
+        {
+          volume.Mask[(k * volume.Size[1] + j) * volume.Size[0] + i] = 0;
+        }
+      }
+    }
+  }
+  itk::SheetMidSurfaceExtractor extractor;
+  const itk::SheetMesh          mesh = extractor.Extract(volume.View());
+  EXPECT_EQ(extractor.GetReport().Method, itk::SheetSurfaceMethodEnum::Roll);
+  double largest = 0.0;
+  size_t edgePoints = 0;
+  for (size_t p = 0; p < mesh.GetNumberOfPoints(); ++p)
+  {
+    const double z = mesh.Points[3 * p + 2];
+    const int    column = mesh.GridIndex[2 * p + 1];
+    if (column == 0 || column == mesh.GridColumns - 1 || (z > 2.5 && z < 20.5))
+    {
+      continue;
+    }
+    ++edgePoints;
+    const double x = mesh.Points[3 * p] - 40.0, y = mesh.Points[3 * p + 1] - 40.0;
+    double       phi = std::atan2(y, x);
+    phi = phi < 0.0 ? phi + 2.0 * Pi : phi;
+    double nearest = 1e9;
+    for (int turn = 0; turn < 3; ++turn)
+    {
+      nearest =
+        std::min(nearest, std::abs(std::hypot(x, y) - (12.0 + taper * z + 6.0 * (phi + 2.0 * Pi * turn) / (2.0 * Pi))));
+    }
+    largest = std::max(largest, nearest);
+  }
+  std::cout << "edge rows: " << edgePoints << " points, farthest " << largest << " voxel from the sheet" << std::endl;
+  EXPECT_GT(edgePoints, 0u);
+  EXPECT_LT(largest, 1.5);
 }
 
 TEST(SheetMidSurfaceExtractor, GridStepsNameAMeshThatJumpsATurn)
