@@ -131,13 +131,13 @@ CompressedMetaImageData(const std::string & file, MetaImageIO * meta, std::strin
 
 template <typename T>
 void
-SwapFrom(ImageIOBase::ByteOrder order, void * buffer, SizeValueType count)
+SwapFrom(IOByteOrderEnum order, void * buffer, SizeValueType count)
 {
-  if (order == ImageIOBase::ByteOrder::BigEndian)
+  if (order == IOByteOrderEnum::BigEndian)
   {
     ByteSwapper<T>::SwapRangeFromSystemToBigEndian(static_cast<T *>(buffer), count);
   }
-  else if (order == ImageIOBase::ByteOrder::LittleEndian)
+  else if (order == IOByteOrderEnum::LittleEndian)
   {
     ByteSwapper<T>::SwapRangeFromSystemToLittleEndian(static_cast<T *>(buffer), count);
   }
@@ -390,9 +390,9 @@ CheckedMetaImageIO::Read(void * buffer)
   }
   // MetaIO's own byte order fix (ITK's byte order states the system's), by the components'
   // size.
-  const SizeValueType count = this->GetImageSizeInComponents();
-  const ByteOrder     order =
-    this->GetMetaImagePointer()->BinaryDataByteOrderMSB() ? ByteOrder::BigEndian : ByteOrder::LittleEndian;
+  const SizeValueType   count = this->GetImageSizeInComponents();
+  const IOByteOrderEnum order =
+    this->GetMetaImagePointer()->BinaryDataByteOrderMSB() ? IOByteOrderEnum::BigEndian : IOByteOrderEnum::LittleEndian;
   switch (this->GetComponentSize())
   {
     case 1:
