@@ -18,6 +18,8 @@
 #ifndef itkReadableTextureImageFilter_hxx
 #define itkReadableTextureImageFilter_hxx
 
+#include "itkReadableTextureImageFilter.h"
+
 #include "itkProgressAccumulator.h"
 
 #include <algorithm>
