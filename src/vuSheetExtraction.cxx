@@ -502,26 +502,20 @@ Extraction::ResampleColumns()
     columnsOf[k].resize(2 * columns);
     if (method == SheetSurfaceMethodEnum::Roll)
     {
-      // About the roll axis, angle and radius: the same fraction of two slices' lengths
-      // lies at different angles where the sheet's length changes along the axis, and the
-      // chord between two points of a turn cuts inside it (by r (1 - cos(a / 2)) for an
-      // angle a between them: a voxel and more on the outer turns).
-      const auto centre = [&](long slice, int d) {
-        return m_Report.AxisCentre[d] + m_Report.AxisSlope[d] * static_cast<double>(slice) * sz + rollCentreOffset[d];
+      // Along the turns, not on chords (a voxel and more inside the outer turns).
+      const auto centre = [&](long slice, double xy[2]) {
+        for (int d = 0; d < 2; ++d)
+        {
+          xy[d] =
+            m_Report.AxisCentre[d] + m_Report.AxisSlope[d] * static_cast<double>(slice) * sz + rollCentreOffset[d];
+        }
       };
-      const double c[2] = { (1.0 - t) * centre(before, 0) + t * centre(after, 0),
-                            (1.0 - t) * centre(before, 1) + t * centre(after, 1) };
+      double c0[2], c1[2];
+      centre(before, c0);
+      centre(after, c1);
       for (size_t i = 0; i < columns; ++i)
       {
-        const double ax = columnsOf[before][2 * i] - centre(before, 0),
-                     ay = columnsOf[before][2 * i + 1] - centre(before, 1);
-        const double bx = columnsOf[after][2 * i] - centre(after, 0),
-                     by = columnsOf[after][2 * i + 1] - centre(after, 1);
-        const double ra = std::hypot(ax, ay), rb = std::hypot(bx, by);
-        const double turn = std::atan2(ax * by - ay * bx, ax * bx + ay * by); // from a to b, within half a turn
-        const double angle = std::atan2(ay, ax) + t * turn, r = (1.0 - t) * ra + t * rb;
-        columnsOf[k][2 * i] = c[0] + r * std::cos(angle);
-        columnsOf[k][2 * i + 1] = c[1] + r * std::sin(angle);
+        AlongTheTurn(&columnsOf[before][2 * i], c0, &columnsOf[after][2 * i], c1, t, &columnsOf[k][2 * i]);
       }
     }
     else

@@ -142,6 +142,17 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
 }
 
 void
+AlongTheTurn(const double p0[2], const double c0[2], const double p1[2], const double c1[2], double t, double out[2])
+{
+  const double x0 = p0[0] - c0[0], y0 = p0[1] - c0[1], x1 = p1[0] - c1[0], y1 = p1[1] - c1[1];
+  const double turn = std::atan2(x0 * y1 - y0 * x1, x0 * x1 + y0 * y1);
+  const double angle = std::atan2(y0, x0) + t * turn;
+  const double radius = std::max(0.0, (1.0 - t) * std::hypot(x0, y0) + t * std::hypot(x1, y1));
+  out[0] = (1.0 - t) * c0[0] + t * c1[0] + radius * std::cos(angle);
+  out[1] = (1.0 - t) * c0[1] + t * c1[1] + radius * std::sin(angle);
+}
+
+void
 ExtrapolateEdgeRows(SheetMesh &  mesh,
                     double       zFirst,
                     double       zLast,
@@ -162,21 +173,16 @@ ExtrapolateEdgeRows(SheetMesh &  mesh,
       inLast = r;
     }
   }
-  // Column c at height z on the line through rows a and b: angle and radius about the axis.
+  // Column c at height z on the trend through rows a and b.
   auto predict = [&](long a, long b, size_t c, double z, double out[2]) {
-    double polar[2][2];
-    for (int i = 0; i < 2; ++i)
-    {
-      const double * q = point(i == 0 ? a : b, c);
-      const double   x = q[0] - axisCentre[0] - axisSlope[0] * q[2], y = q[1] - axisCentre[1] - axisSlope[1] * q[2];
-      polar[i][0] = std::atan2(y, x);
-      polar[i][1] = std::hypot(x, y);
-    }
-    const double t = (z - rowZ(a)) / (rowZ(a) - rowZ(b));
-    const double angle = polar[0][0] + t * std::remainder(polar[0][0] - polar[1][0], 2.0 * M_PI);
-    const double radius = std::max(0.0, polar[0][1] + t * (polar[0][1] - polar[1][1]));
-    out[0] = axisCentre[0] + axisSlope[0] * z + radius * std::cos(angle);
-    out[1] = axisCentre[1] + axisSlope[1] * z + radius * std::sin(angle);
+    auto centre = [&](long r, double xy[2]) {
+      xy[0] = axisCentre[0] + axisSlope[0] * rowZ(r);
+      xy[1] = axisCentre[1] + axisSlope[1] * rowZ(r);
+    };
+    double ca[2], cb[2];
+    centre(a, ca);
+    centre(b, cb);
+    AlongTheTurn(point(b, c), cb, point(a, c), ca, 1.0 + (z - rowZ(a)) / (rowZ(a) - rowZ(b)), out);
   };
   // The row inside the traced range, beyond `from` in `direction`, at least `distance`
   // from it (so that a trend is not amplified), or the last one there is.

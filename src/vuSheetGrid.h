@@ -42,6 +42,14 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
                size_t                        columns,
                double                        agreement);
 
+/** The point a fraction t of the way from p0 to p1 along a roll's turn: angle (the
+ * shorter way round) and radius about the axis, whose centres in the two points' slices are
+ * c0 and c1, interpolated (extrapolated for t outside [0, 1]); out gets (x, y). Where a
+ * sheet's length changes along the axis, the same fraction of two slices' lengths lies at
+ * different angles, and the chord between them cuts inside the turn. */
+void
+AlongTheTurn(const double p0[2], const double c0[2], const double p1[2], const double c1[2], double t, double out[2]);
+
 /** Rows of a roll's grid that lie beyond the traced slices (z < zFirst or z > zLast: the
  * sheet's faint edges along the axis, reached on the nearest traced slices' curve)
  * continued along the roll's trend instead: angle and radius about the axis (through
