@@ -456,6 +456,15 @@ Extraction::MeasureSheet()
 }
 
 void
+Extraction::RollCentre(double z, double xy[2]) const
+{
+  for (int d = 0; d < 2; ++d)
+  {
+    xy[d] = m_Report.AxisCentre[d] + m_Report.AxisSlope[d] * z + rollCentreOffset[d];
+  }
+}
+
+void
 Extraction::ResampleColumns()
 {
   // A slice shorter or longer than the median by a sizeable part of a column would shear
@@ -503,16 +512,9 @@ Extraction::ResampleColumns()
     if (method == SheetSurfaceMethodEnum::Roll)
     {
       // Along the turns, not on chords (a voxel and more inside the outer turns).
-      const auto centre = [&](long slice, double xy[2]) {
-        for (int d = 0; d < 2; ++d)
-        {
-          xy[d] =
-            m_Report.AxisCentre[d] + m_Report.AxisSlope[d] * static_cast<double>(slice) * sz + rollCentreOffset[d];
-        }
-      };
       double c0[2], c1[2];
-      centre(before, c0);
-      centre(after, c1);
+      RollCentre(static_cast<double>(before) * sz, c0);
+      RollCentre(static_cast<double>(after) * sz, c1);
       for (size_t i = 0; i < columns; ++i)
       {
         AlongTheTurn(&columnsOf[before][2 * i], c0, &columnsOf[after][2 * i], c1, t, &columnsOf[k][2 * i]);
@@ -687,8 +689,8 @@ Extraction::BuildMesh()
   SheetMesh    mesh = BuildSheetGrid(columnsOf, firstGood, lastGood, sz, below, rows, rowSpacing, columns, agreement);
   if (method == SheetSurfaceMethodEnum::Roll)
   {
-    const double centre[2] = { m_Report.AxisCentre[0] + rollCentreOffset[0],
-                               m_Report.AxisCentre[1] + rollCentreOffset[1] };
+    double centre[2];
+    RollCentre(0.0, centre);
     ExtrapolateEdgeRows(mesh,
                         static_cast<double>(firstGood) * sz,
                         static_cast<double>(lastGood) * sz,

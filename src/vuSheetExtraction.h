@@ -78,6 +78,10 @@ struct Extraction
   ChooseRowSpacing();
   SheetMesh
   BuildMesh();
+  // The roll's spiral centre in the slice plane at height z (mm): the centroid line moved by
+  // the tracer's offset.
+  void
+  RollCentre(double z, double xy[2]) const;
 
   const SheetVolumeView &                            volume;
   const SheetMidSurfaceParameters &                  parameters;
