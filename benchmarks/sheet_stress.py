@@ -19,6 +19,7 @@ pydicom, PIL and tesseract are needed):
     sheet_stress.py run --scans 100 --seed S --out DIR [--jobs 1] [--region accept|wide]
                         [--csv FILE] [--tool build/bin/virtual-unwrap] [--small]
                         [--keep failures|all|none] [--selfcheck] [--strict] [--stage unwrap|mesh]
+                        [--require-success]
         Generate scans with seeds S, S+1, ..., run `virtual-unwrap unwrap INPUT -o OUT -q`
         on each with default options (--spacing added for TIFF stacks, which carry no
         geometry), score it, write one CSV row per scan and print a per-factor summary
@@ -28,6 +29,8 @@ pydicom, PIL and tesseract are needed):
         scored on the mesh alone: several times faster, for the hundred-scan run and the map.
         --strict: exit 2 if the tool crashed (signal, exit status other than 0 or 1,
         missing outputs) or scoring raised; a refusal (exit 1) is a failed scan, not an error.
+        --require-success: exit 3 unless every scan succeeds (for a regression check on a
+        scan that once failed, given by its seed).
 
     sheet_stress.py map --per-cell K --out DIR --csv FILE --png FILE [--seed S]
                         [--snr 8,5,4,3,2.5,2,1.5] [--gaps 1,1.5,2,3,4,6] [--stage unwrap|mesh]
@@ -1820,6 +1823,8 @@ def main():
     r.add_argument("--timeout", type=float, default=1800.0, help="seconds per tool run")
     r.add_argument("--selfcheck", action="store_true", help="run the self-check first")
     r.add_argument("--strict", action="store_true", help="exit 2 if the tool crashed or scoring failed")
+    r.add_argument("--require-success", action="store_true",
+                   help="exit 3 unless every scan succeeds (mesh error, jumps, coverage): a regression check")
     m = sub.add_parser("map", help="stability map: success rate over SNR x gap")
     m.add_argument("--per-cell", type=int, default=5)
     m.add_argument("--seed", type=int, default=100000)
@@ -1908,6 +1913,10 @@ def main():
             print(f"\n{csv_path}: {len(rows)} complete row(s) for {args.scans} scan(s)", file=sys.stderr)
         if args.strict and (bad or incomplete):
             sys.exit(2)
+        failed = [r["seed"] for r in rows if r.get("success") != "True"]
+        if args.require_success and (failed or not rows):
+            print(f"\n{len(failed)} of {len(rows)} scan(s) did not succeed: " + ", ".join(failed), file=sys.stderr)
+            sys.exit(3)
     elif args.command == "map":
         snrs = [float(x) for x in args.snr.split(",")]
         gaps = [float(x) for x in args.gaps.split(",")]

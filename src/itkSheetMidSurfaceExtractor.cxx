@@ -126,11 +126,77 @@ RefineSheetIntensityLevels(const std::vector<float> & values, SheetIntensityLeve
   return levels;
 }
 
+namespace {
+// Places where a roll's mesh may jump layers, by its own checks.
+size_t
+PossibleLayerJumps(const SheetMidSurfaceReport & report)
+{
+  return report.GridSteps.size() + report.OffSheetRuns.size() + report.LayerJumps.size();
+}
+// Extent of a grid mesh along the roll axis (mm).
+double
+SpanAlongAxis(const SheetMesh & mesh, const SheetMidSurfaceReport & report)
+{
+  return static_cast<double>(std::max(0, mesh.GridRows - 1)) * report.SpacingAlongAxis;
+}
+// A mesh from another seed slice is taken only when its sheet is as long, and its grid as
+// wide along the axis, as the first mesh's to within this fraction: a trace that lost part
+// of the sheet, or slices left out, has fewer places to check.
+constexpr double SeedExtentTolerance = 0.02;
+} // namespace
+
 SheetMesh
 SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
 {
   m_Report = SheetMidSurfaceReport{};
   SheetTracing::Extraction extraction(volume, m_Parameters, m_Report, m_Progress);
-  return extraction.Run();
+  SheetMesh mesh = extraction.Run();
+  // Every slice of a roll is traced from its neighbour, outwards from one seed slice, so a
+  // seed slice traced wrongly (the inner end cut across to the next turn, a turn lost over
+  // part of a revolution where turns touch) carries its error into every slice. Where the
+  // mesh's own checks name possible layer jumps, the sheet is traced again from each of the
+  // other candidate seed slices, and the mesh whose checks name the fewest is kept.
+  const size_t first = PossibleLayerJumps(m_Report);
+  if (m_Report.Method != SheetSurfaceMethodEnum::Roll || first == 0)
+  {
+    return mesh;
+  }
+  // The progress stays at its end; a caller's abort still stops the tracing.
+  const ProgressCallback again = [this](double) { return !m_Progress || m_Progress(1.0); };
+  size_t                 fewest = first;
+  long                   chosen = 0;
+  for (long candidate = 1; candidate <= 2; ++candidate)
+  {
+    SheetMidSurfaceReport    report;
+    SheetTracing::Extraction other(volume, m_Parameters, report, again);
+    other.seedCandidate = candidate;
+    SheetMesh otherMesh;
+    try
+    {
+      otherMesh = other.Run();
+    }
+    catch (const ExceptionObject &)
+    {
+      continue; // that seed slice does not trace: the first mesh stands
+    }
+    if (report.Method == SheetSurfaceMethodEnum::Roll && PossibleLayerJumps(report) < fewest &&
+        std::abs(report.SheetLength - m_Report.SheetLength) <= SeedExtentTolerance * m_Report.SheetLength &&
+        SpanAlongAxis(otherMesh, report) >= (1.0 - SeedExtentTolerance) * SpanAlongAxis(mesh, m_Report))
+    {
+      fewest = PossibleLayerJumps(report);
+      chosen = candidate;
+      std::swap(mesh, otherMesh);
+      std::swap(m_Report, report);
+    }
+  }
+  if (chosen > 0)
+  {
+    std::ostringstream text;
+    text << "traced from the seed slice at " << (chosen == 1 ? 30 : 70)
+         << " % of the sheet's width along the axis instead of the middle one: its mesh's own checks name "
+         << fewest << " possible layer jump(s), the middle one's " << first;
+    m_Report.Warnings.push_back(text.str());
+  }
+  return mesh;
 }
 } // end namespace itk

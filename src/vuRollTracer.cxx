@@ -454,7 +454,8 @@ TraceSeed(const SheetVolumeView &     volume,
 
 // The seed slice among three (at 50, 30 and 70 % of the sheet's width), each traced at the
 // same time given two threads or more: the middle one unless another's trace passes
-// through clearly more of its crossings. Returns the index of the chosen one in `seeds`.
+// through clearly more of its crossings, or the one the settings name (then alone traced).
+// Returns the index of the chosen one in `seeds`.
 size_t
 ChooseSeed(const SheetVolumeView &     volume,
            const float *               values,
@@ -470,6 +471,10 @@ ChooseSeed(const SheetVolumeView &     volume,
     {
       candidates.push_back(index);
     }
+  }
+  if (settings.SeedCandidate >= 0)
+  {
+    candidates = { candidates[std::min(candidates.size() - 1, static_cast<size_t>(settings.SeedCandidate))] };
   }
   std::vector<std::optional<SeedTrace>> traced(candidates.size());
   std::vector<std::function<void()>>    seedTasks;

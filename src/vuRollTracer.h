@@ -40,6 +40,10 @@ struct Settings
   /** Line through the slices' mask centroids: centre (x, y) at slice 0 and drift per mm of z. */
   double AxisCentre[2]{ 0.0, 0.0 };
   double AxisSlope[2]{ 0.0, 0.0 };
+  /** The candidate seed slice to trace every slice from (0: at 50 %, 1: at 30 %, 2: at 70 %
+   * of the sheet's width along the axis); -1: the one whose trace explains clearly more of
+   * its slice's crossings. */
+  long SeedCandidate{ -1 };
 };
 
 /** The trace of one slice. */

@@ -224,6 +224,7 @@ Extraction::TraceSlices()
       settings.AxisCentre[d] = m_Report.AxisCentre[d];
       settings.AxisSlope[d] = m_Report.AxisSlope[d];
     }
+    settings.SeedCandidate = seedCandidate;
     const double rollShare = method == SheetSurfaceMethodEnum::Auto ? 0.4 : 0.8;
     const auto   roll = RollTracing::TraceRoll(volume,
                                              volume.Intensity != nullptr ? volume.Intensity : maskValues.data(),
