@@ -143,6 +143,10 @@ SpanAlongAxis(const SheetMesh & mesh, const SheetMidSurfaceReport & report)
 // wide along the axis, as the first mesh's to within this fraction: a trace that lost part
 // of the sheet, or slices left out, has fewer places to check.
 constexpr double SeedExtentTolerance = 0.02;
+// ... and only when its checks name clearly fewer places: at most the first count less a
+// quarter of it (and less one). The checks also name places of a correct mesh (sharp bends
+// of a long roll's inner turns), a few more or less from one trace to the next.
+constexpr size_t SeedCheckMargin = 4;
 } // namespace
 
 SheetMesh
@@ -179,7 +183,8 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
     {
       continue; // that seed slice does not trace: the first mesh stands
     }
-    if (report.Method == SheetSurfaceMethodEnum::Roll && PossibleLayerJumps(report) < fewest &&
+    if (report.Method == SheetSurfaceMethodEnum::Roll &&
+        PossibleLayerJumps(report) + std::max<size_t>(1, fewest / SeedCheckMargin) <= fewest &&
         std::abs(report.SheetLength - m_Report.SheetLength) <= SeedExtentTolerance * m_Report.SheetLength &&
         SpanAlongAxis(otherMesh, report) >= (1.0 - SeedExtentTolerance) * SpanAlongAxis(mesh, m_Report))
     {
