@@ -181,6 +181,10 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
     }
     catch (const ExceptionObject &)
     {
+      if (m_Progress && !m_Progress(1.0))
+      {
+        throw; // aborted by the caller
+      }
       continue; // that seed slice does not trace: the first mesh stands
     }
     if (report.Method == SheetSurfaceMethodEnum::Roll &&
