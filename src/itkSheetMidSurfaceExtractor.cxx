@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "itkSheetMidSurfaceExtractor.h"
 
+#include "vuRollTracer.h"
 #include "vuSheetExtraction.h"
 
 #include "itkImage.h"
@@ -24,6 +25,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <sstream>
 
@@ -154,7 +156,7 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
 {
   m_Report = SheetMidSurfaceReport{};
   SheetTracing::Extraction extraction(volume, m_Parameters, m_Report, m_Progress);
-  SheetMesh mesh = extraction.Run();
+  SheetMesh                mesh = extraction.Run();
   // Every slice of a roll is traced from its neighbour, outwards from one seed slice, so a
   // seed slice traced wrongly (the inner end cut across to the next turn, a turn lost over
   // part of a revolution where turns touch) carries its error into every slice. Where the
@@ -169,7 +171,7 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
   const ProgressCallback again = [this](double) { return !m_Progress || m_Progress(1.0); };
   size_t                 fewest = first;
   long                   chosen = 0;
-  for (long candidate = 1; candidate <= 2; ++candidate)
+  for (long candidate = 1; candidate < static_cast<long>(std::size(RollTracing::SeedFractions)); ++candidate)
   {
     SheetMidSurfaceReport    report;
     SheetTracing::Extraction other(volume, m_Parameters, report, again);
@@ -201,9 +203,9 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
   if (chosen > 0)
   {
     std::ostringstream text;
-    text << "traced from the seed slice at " << (chosen == 1 ? 30 : 70)
-         << " % of the sheet's width along the axis instead of the middle one: its mesh's own checks name "
-         << fewest << " possible layer jump(s), the middle one's " << first;
+    text << "traced from the seed slice at " << std::lround(100.0 * RollTracing::SeedFractions[chosen])
+         << " % of the sheet's width along the axis instead of the middle one: its mesh's own checks name " << fewest
+         << " possible layer jump(s), the middle one's " << first;
     m_Report.Warnings.push_back(text.str());
   }
   return mesh;

@@ -464,7 +464,7 @@ ChooseSeed(const SheetVolumeView &     volume,
            std::vector<long> &         candidates,
            std::vector<SeedTrace> &    seeds)
 {
-  for (const double fraction : { 0.5, 0.3, 0.7 })
+  for (const double fraction : SeedFractions)
   {
     const auto index = static_cast<long>(fraction * static_cast<double>(material.size() - 1) + 0.5);
     if (std::find(candidates.begin(), candidates.end(), index) == candidates.end())

@@ -40,11 +40,14 @@ struct Settings
   /** Line through the slices' mask centroids: centre (x, y) at slice 0 and drift per mm of z. */
   double AxisCentre[2]{ 0.0, 0.0 };
   double AxisSlope[2]{ 0.0, 0.0 };
-  /** The candidate seed slice to trace every slice from (0: at 50 %, 1: at 30 %, 2: at 70 %
-   * of the sheet's width along the axis); -1: the one whose trace explains clearly more of
-   * its slice's crossings. */
+  /** The candidate seed slice to trace every slice from (an index into SeedFractions);
+   * -1: the one whose trace explains clearly more of its slice's crossings. */
   long SeedCandidate{ -1 };
 };
+
+/** Where the candidate seed slices lie, as fractions of the sheet's width along the axis;
+ * the first is preferred. */
+constexpr double SeedFractions[] = { 0.5, 0.3, 0.7 };
 
 /** The trace of one slice. */
 struct SliceTrace

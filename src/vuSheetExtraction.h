@@ -104,7 +104,7 @@ struct Extraction
   size_t                                             columns{ 0 };
   std::vector<Polyline>                              columnsOf; // per slice
   double rollCentreOffset[2]{ 0.0, 0.0 };                       // spiral centre relative to the centroid line (mm)
-  long   seedCandidate{ -1 }; // RollTracing::Settings::SeedCandidate
+  long   seedCandidate{ -1 };                                   // RollTracing::Settings::SeedCandidate
 };
 } // namespace SheetTracing
 } // end namespace itk
