@@ -41,10 +41,6 @@ using RollTracing::Median;
 
 // Slices at most by which the mesh reaches past the last well-traced slice along the axis.
 constexpr long EdgeSlices = 8;
-// How far (as a fraction of the turn spacing) the rows past the last well-traced slice may
-// follow the roll's trend along the axis away from that slice's curve: a third of the way
-// to the next turn.
-constexpr double EdgeTrendShift = 0.3;
 } // namespace
 
 SheetMesh
@@ -659,13 +655,13 @@ Extraction::ChooseRowSpacing()
 SheetMesh
 Extraction::BuildMesh()
 {
-  // Rows: triangular-weighted average of the slices within one row spacing. Where slices
-  // beyond the first or last good one hold the sheet (its edge along the axis), the mesh
-  // reaches over them, and half a slice further to the middle of the last one's voxels,
-  // on the curve of the last good slice.
+  // Rows: a weighted line fit along the slices within one row spacing (BuildSheetGrid).
+  // Where slices beyond the first or last good one hold the sheet (its edge along the axis),
+  // the mesh reaches over them, and half a slice further to the middle of the last one's
+  // voxels, on the trend of the last good slices.
   // Slices beyond the good ones that still hold most of a slice's material (traces lost
-  // in the faint, blurred slices at the sheet's edge along the axis) are covered too, on
-  // the curve of the nearest good slice, up to a few slices.
+  // in the faint, blurred slices at the sheet's edge along the axis) are covered too, up to
+  // a few slices.
   const double fullArea = partialArea / 0.75;
   auto         reach = [&](long from, long dir) {
     long k = from + dir;
@@ -690,14 +686,6 @@ Extraction::BuildMesh()
   SheetMesh    mesh = BuildSheetGrid(columnsOf, firstGood, lastGood, sz, below, rows, rowSpacing, columns, agreement);
   if (method == SheetSurfaceMethodEnum::Roll)
   {
-    double centre[2];
-    RollCentre(0.0, centre);
-    ExtrapolateEdgeRows(mesh,
-                        static_cast<double>(firstGood) * sz,
-                        static_cast<double>(lastGood) * sz,
-                        centre,
-                        m_Report.AxisSlope,
-                        EdgeTrendShift * std::max(m_Report.TurnSpacing, m_Report.SheetThickness));
     OrientNormalsToAxis(mesh, m_Report.AxisCentre, m_Report.AxisSlope);
   }
   m_Report.SpacingAlongSheet = referenceLength / static_cast<double>(columns - 1);

@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace itk {
 namespace SheetTracing {
@@ -47,12 +48,18 @@ WeightedMedian(std::vector<std::pair<double, double>> & values)
 
 // Point of column c of a grid row from the slices of its window (slice, weight): the
 // weighted mean of the slices' points within `agreement` of their weighted median point
-// (the median alone where none is).
+// (the median alone where none is). With `at` (a slice coordinate, for a row whose window
+// the traced range cuts), a weighted straight-line fit along those slices taken at `at`
+// instead: the mean lies inside the window, and a sheet that moves along the axis (a taper,
+// a skew) would leave the edge row behind it. Inner rows keep the mean: where the agreement
+// leaves out one side of a symmetric window (a touch's edge along the axis), a line through
+// the other side would carry the row off along that side's slope.
 void
 RobustRowPoint(const std::vector<std::pair<long, double>> & window,
                const std::vector<Polyline> &                columnsOf,
                size_t                                       c,
                double                                       agreement,
+               std::optional<double>                        at,
                double                                       point[2])
 {
   std::vector<std::pair<double, double>> values;
@@ -67,19 +74,52 @@ RobustRowPoint(const std::vector<std::pair<long, double>> & window,
     }
     median[axis] = WeightedMedian(values);
   }
-  double sum[2] = { 0.0, 0.0 }, weightSum = 0.0;
+  auto agrees = [&](long k) {
+    const double * p = &columnsOf[static_cast<size_t>(k)][2 * c];
+    return std::hypot(p[0] - median[0], p[1] - median[1]) <= agreement;
+  };
+  double sum[2] = { 0.0, 0.0 }, weightSum = 0.0, sliceSum = 0.0;
   for (const auto & [k, weight] : window)
   {
-    const double * p = &columnsOf[static_cast<size_t>(k)][2 * c];
-    if (std::hypot(p[0] - median[0], p[1] - median[1]) <= agreement)
+    if (agrees(k))
     {
+      const double * p = &columnsOf[static_cast<size_t>(k)][2 * c];
       sum[0] += weight * p[0];
       sum[1] += weight * p[1];
+      sliceSum += weight * static_cast<double>(k);
       weightSum += weight;
     }
   }
-  point[0] = weightSum > 0.0 ? sum[0] / weightSum : median[0];
-  point[1] = weightSum > 0.0 ? sum[1] / weightSum : median[1];
+  if (!(weightSum > 0.0))
+  {
+    point[0] = median[0];
+    point[1] = median[1];
+    return;
+  }
+  point[0] = sum[0] / weightSum;
+  point[1] = sum[1] / weightSum;
+  if (!at)
+  {
+    return;
+  }
+  const double meanSlice = sliceSum / weightSum;
+  double       spread = 0.0, covariance[2] = { 0.0, 0.0 };
+  for (const auto & [k, weight] : window)
+  {
+    if (agrees(k))
+    {
+      const double * p = &columnsOf[static_cast<size_t>(k)][2 * c];
+      const double   dk = static_cast<double>(k) - meanSlice;
+      spread += weight * dk * dk;
+      covariance[0] += weight * dk * (p[0] - point[0]);
+      covariance[1] += weight * dk * (p[1] - point[1]);
+    }
+  }
+  if (spread > 1e-9 * weightSum)
+  {
+    point[0] += covariance[0] / spread * (*at - meanSlice);
+    point[1] += covariance[1] / spread * (*at - meanSlice);
+  }
 }
 } // namespace
 
@@ -104,10 +144,16 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
   {
     const double z = static_cast<double>(firstGood) * sz - below + static_cast<double>(r) * rowSpacing;
     const double zc = std::clamp(z, static_cast<double>(firstGood) * sz, static_cast<double>(lastGood) * sz);
+    // A window the traced range cuts (the rows at the sheet's edges along the axis) reaches
+    // twice as far inside, so that the fit's slope, carried to the row, rests on as many
+    // slices as an inner row's mean.
+    const bool cut =
+      zc - kernel < static_cast<double>(firstGood) * sz || zc + kernel > static_cast<double>(lastGood) * sz;
+    const double                         reach = cut ? 2.0 * kernel : kernel;
     std::vector<std::pair<long, double>> window;
     for (long k = firstGood; k <= lastGood; ++k)
     {
-      const double weight = 1.0 - std::abs(static_cast<double>(k) * sz - zc) / kernel;
+      const double weight = 1.0 - std::abs(static_cast<double>(k) * sz - zc) / reach;
       if (weight > 0.0)
       {
         window.emplace_back(k, weight);
@@ -117,7 +163,7 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
     {
       const size_t p = r * columns + c;
       double       point[2];
-      RobustRowPoint(window, columnsOf, c, agreement, point);
+      RobustRowPoint(window, columnsOf, c, agreement, cut ? std::optional<double>(z / sz) : std::nullopt, point);
       mesh.Points[3 * p] = point[0];
       mesh.Points[3 * p + 1] = point[1];
       mesh.Points[3 * p + 2] = z;
@@ -150,96 +196,6 @@ AlongTheTurn(const double p0[2], const double c0[2], const double p1[2], const d
   const double radius = std::max(0.0, (1.0 - t) * std::hypot(x0, y0) + t * std::hypot(x1, y1));
   out[0] = (1.0 - t) * c0[0] + t * c1[0] + radius * std::cos(angle);
   out[1] = (1.0 - t) * c0[1] + t * c1[1] + radius * std::sin(angle);
-}
-
-void
-ExtrapolateEdgeRows(SheetMesh &  mesh,
-                    double       zFirst,
-                    double       zLast,
-                    const double axisCentre[2],
-                    const double axisSlope[2],
-                    double       largestShift)
-{
-  const auto rows = static_cast<long>(mesh.GridRows);
-  const auto columns = static_cast<size_t>(mesh.GridColumns);
-  auto       point = [&](long r, size_t c) { return &mesh.Points[3 * (static_cast<size_t>(r) * columns + c)]; };
-  auto       rowZ = [&](long r) { return point(r, 0)[2]; };
-  long       inFirst = -1, inLast = -1;
-  for (long r = 0; r < rows; ++r)
-  {
-    if (rowZ(r) >= zFirst && rowZ(r) <= zLast)
-    {
-      inFirst = inFirst < 0 ? r : inFirst;
-      inLast = r;
-    }
-  }
-  // Column c at height z on the trend through rows a and b.
-  auto predict = [&](long a, long b, size_t c, double z, double out[2]) {
-    auto centre = [&](long r, double xy[2]) {
-      xy[0] = axisCentre[0] + axisSlope[0] * rowZ(r);
-      xy[1] = axisCentre[1] + axisSlope[1] * rowZ(r);
-    };
-    double ca[2], cb[2];
-    centre(a, ca);
-    centre(b, cb);
-    AlongTheTurn(point(b, c), cb, point(a, c), ca, 1.0 + (z - rowZ(a)) / (rowZ(a) - rowZ(b)), out);
-  };
-  // The row inside the traced range, beyond `from` in `direction`, at least `distance`
-  // from it (so that a trend is not amplified), or the last one there is.
-  auto beyond = [&](long from, double distance, long direction) {
-    long r = from + direction;
-    while (r + direction >= inFirst && r + direction <= inLast && std::abs(rowZ(r) - rowZ(from)) < distance)
-    {
-      r += direction;
-    }
-    return r;
-  };
-  auto extrapolate = [&](long edge, long near, long direction) {
-    const double distance = std::abs(rowZ(edge) - rowZ(near));
-    const long   far = beyond(near, distance, direction), farther = beyond(far, distance, direction);
-    if (far == farther || far < inFirst || far > inLast || farther < inFirst || farther > inLast)
-    {
-      return;
-    }
-    // Kept only where the trend would have foretold the near row from the two beyond it
-    // better than the far row's curve does (a radius that swings along the axis has turned).
-    std::vector<double> trendMiss(columns), curveMiss(columns);
-    for (size_t c = 0; c < columns; ++c)
-    {
-      double foretold[2];
-      predict(far, farther, c, rowZ(near), foretold);
-      trendMiss[c] = std::hypot(foretold[0] - point(near, c)[0], foretold[1] - point(near, c)[1]);
-      curveMiss[c] = std::hypot(point(far, c)[0] - point(near, c)[0], point(far, c)[1] - point(near, c)[1]);
-    }
-    std::nth_element(trendMiss.begin(), trendMiss.begin() + columns / 2, trendMiss.end());
-    std::nth_element(curveMiss.begin(), curveMiss.begin() + columns / 2, curveMiss.end());
-    if (trendMiss[columns / 2] >= curveMiss[columns / 2])
-    {
-      return;
-    }
-    for (size_t c = 0; c < columns; ++c)
-    {
-      double * e = point(edge, c);
-      double   target[2];
-      predict(near, far, c, e[2], target);
-      const double shift = std::hypot(target[0] - e[0], target[1] - e[1]);
-      const double keep = shift > largestShift ? largestShift / shift : 1.0;
-      e[0] += keep * (target[0] - e[0]);
-      e[1] += keep * (target[1] - e[1]);
-    }
-  };
-  if (inFirst < 0 || inLast <= inFirst)
-  {
-    return;
-  }
-  for (long r = 0; r < inFirst; ++r)
-  {
-    extrapolate(r, inFirst, +1);
-  }
-  for (long r = inLast + 1; r < rows; ++r)
-  {
-    extrapolate(r, inLast, -1);
-  }
 }
 
 void

@@ -28,9 +28,12 @@ namespace itk {
 namespace SheetTracing {
 /** The grid mesh of a sheet from its slices' columns (`columnsOf[k]`: `columns` points of
  * slice k, for every slice from firstGood to lastGood). Row r lies at z = firstGood * sz -
- * below + r * rowSpacing: the triangular-weighted mean of the slices within one row
- * spacing (at least one slice), leaving out the slices whose point lies farther than
- * `agreement` from the row's weighted median point. Triangles with normals dP/dw x dP/ds. */
+ * below + r * rowSpacing: per column, a straight line along the slices fitted, with
+ * triangular weights, to the slices within one row spacing (at least one slice; two where
+ * the traced range cuts that window), leaving out the slices whose point lies farther than
+ * `agreement` from the row's weighted median point, and taken at z: the weighted mean
+ * inside the range, the sheet's trend at its edges (rows past the traced slices included).
+ * Triangles with normals dP/dw x dP/ds. */
 SheetMesh
 BuildSheetGrid(const std::vector<Polyline> & columnsOf,
                long                          firstGood,
@@ -49,23 +52,6 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
  * different angles, and the chord between them cuts inside the turn. */
 void
 AlongTheTurn(const double p0[2], const double c0[2], const double p1[2], const double c1[2], double t, double out[2]);
-
-/** Rows of a roll's grid that lie beyond the traced slices (z < zFirst or z > zLast: the
- * sheet's faint edges along the axis, reached on the nearest traced slices' curve)
- * continued along the roll's trend instead: angle and radius about the axis (through
- * axisCentre at z = 0, drift axisSlope per mm of z) extrapolated linearly from the nearest
- * row inside the range and the row inside at least as far from it as the edge row is, each
- * point moved by at most `largestShift`. A roll's radius may change along its axis by a
- * voxel over a few slices; where it swings back, the trend misleads, so the trend is
- * followed only where it foretells the nearest row (from the two rows beyond it) better
- * than the next row's curve does. */
-void
-ExtrapolateEdgeRows(SheetMesh &  mesh,
-                    double       zFirst,
-                    double       zLast,
-                    const double axisCentre[2],
-                    const double axisSlope[2],
-                    double       largestShift);
 
 /** Turns the mesh's triangles over unless their normals point, on the whole, to the axis
  * through axisCentre (at z = 0) with drift axisSlope per mm of z (the inside face of a roll). */

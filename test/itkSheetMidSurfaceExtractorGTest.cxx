@@ -300,7 +300,8 @@ TEST(SheetMidSurfaceExtractor, RowsPastTheTracedSlicesFollowTheRollsTaper)
   // slices hold only part of the sheet (theta mod 2 pi beyond 1.2 pi missing: the faint,
   // broken edge of a sheet along the axis), so they are not traced and the mesh reaches
   // over them from the traced ones, half a slice past the last. On the curve of the nearest
-  // traced slices the edge rows lay up to 2.1 voxels off the sheet; along the taper 1.2.
+  // traced slices the edge rows lay up to 2.1 voxels off the sheet; extrapolated from the
+  // rows inside along the roll's angle and radius 1.2; on the last slices' own trend 0.88.
   constexpr double taper = 0.4;
   SpiralVolume     volume(24, 1000, 0, 0, 0.0, taper);
   for (size_t k : { 0, 1, 2, 21, 22, 23 })
@@ -345,7 +346,7 @@ TEST(SheetMidSurfaceExtractor, RowsPastTheTracedSlicesFollowTheRollsTaper)
   }
   std::cout << "edge rows: " << edgePoints << " points, farthest " << largest << " voxel from the sheet" << std::endl;
   EXPECT_GT(edgePoints, 0u);
-  EXPECT_LT(largest, 1.3); // 1.22
+  EXPECT_LT(largest, 1.0); // 0.88
 }
 
 TEST(SheetMidSurfaceExtractor, GridStepsNameAMeshThatJumpsATurn)
