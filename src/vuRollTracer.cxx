@@ -26,6 +26,7 @@
 #include <cmath>
 #include <functional>
 #include <future>
+#include <iterator>
 #include <limits>
 #include <numeric>
 #include <optional>
@@ -464,17 +465,25 @@ ChooseSeed(const SheetVolumeView &     volume,
            std::vector<long> &         candidates,
            std::vector<SeedTrace> &    seeds)
 {
-  for (const double fraction : SeedFractions)
-  {
-    const auto index = static_cast<long>(fraction * static_cast<double>(material.size() - 1) + 0.5);
-    if (std::find(candidates.begin(), candidates.end(), index) == candidates.end())
-    {
-      candidates.push_back(index);
-    }
-  }
+  auto sliceAt = [&](double fraction) {
+    return static_cast<long>(fraction * static_cast<double>(material.size() - 1) + 0.5);
+  };
   if (settings.SeedCandidate >= 0)
   {
-    candidates = { candidates[std::min(candidates.size() - 1, static_cast<size_t>(settings.SeedCandidate))] };
+    // The named fraction's own slice (on a sheet a few slices wide two fractions may share one).
+    const size_t named = std::min(std::size(SeedFractions) - 1, static_cast<size_t>(settings.SeedCandidate));
+    candidates = { sliceAt(SeedFractions[named]) };
+  }
+  else
+  {
+    for (const double fraction : SeedFractions)
+    {
+      const long index = sliceAt(fraction);
+      if (std::find(candidates.begin(), candidates.end(), index) == candidates.end())
+      {
+        candidates.push_back(index);
+      }
+    }
   }
   std::vector<std::optional<SeedTrace>> traced(candidates.size());
   std::vector<std::function<void()>>    seedTasks;
