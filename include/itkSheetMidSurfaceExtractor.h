@@ -138,6 +138,9 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
     size_t Slice{ 0 };
   };
   std::vector<GridStep> GridSteps;
+  /** Roll method: grid points put back on their row's curve before the checks (runs of one
+   * or two points off it, SheetMidSurfaceExtractor::SmoothRowSpikes). */
+  size_t RowSpikesSmoothed{ 0 };
   /** Roll method, with intensities: runs of grid points along a row that lie in air (the
    * intensity the tracer reads below a quarter of the sheet's contrast above the air's
    * level), at least three points long: a mesh traced between two turns, or stepping from
@@ -296,6 +299,19 @@ public:
    * the turn spacing. */
   static std::vector<SheetMidSurfaceReport::GridStep>
   FindGridSteps(const SheetMesh & mesh, double limit);
+
+  /** Puts back on its row's curve each run of one or two grid points that leaves it by more
+   * than `limit` (mm, in the slice plane) while the points either side of the run lie on one
+   * smooth curve without it: a column taken onto the neighbouring turn in one row's slices
+   * (the edge of a touch along the axis, an artefact), which returns to its turn at the next
+   * column. A run's points are set to the cubic through the two points before it and the two
+   * after it; each of the two nearest the run must lie within half the limit of the cubic
+   * through its own neighbours (the run left out), so a row that crosses onto another turn
+   * and stays there, or bends sharply, is left as it is, for FindGridSteps to name. The three
+   * columns at either end are left alone. Returns the number of points moved. Extract runs
+   * it on a roll's grid with 0.7 of the turn spacing, before its checks. */
+  static size_t
+  SmoothRowSpikes(SheetMesh & mesh, double limit);
 
   /** Runs of at least `minimumRun` grid points along a row (points in the view's frame,
    * mm) where the view's intensity, as a fraction of (sheetLevel - airLevel) above airLevel

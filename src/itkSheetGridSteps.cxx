@@ -123,6 +123,73 @@ SheetMidSurfaceExtractor::FindGridSteps(const SheetMesh & mesh, double limit)
   return steps;
 }
 
+size_t
+SheetMidSurfaceExtractor::SmoothRowSpikes(SheetMesh & mesh, double limit)
+{
+  const auto rows = static_cast<size_t>(std::max(0, mesh.GridRows));
+  const auto columns = static_cast<long>(std::max(0, mesh.GridColumns));
+  if (!mesh.IsGridStructured() || rows * static_cast<size_t>(columns) != mesh.GetNumberOfPoints() || columns < 9 ||
+      !(limit > 0.0))
+  {
+    return 0;
+  }
+  // The cubic (Lagrange, in the column index) through columns a - 2, a - 1, b + 1 and b + 2
+  // of a row, at column c.
+  auto cubic = [](const double * row, long a, long b, long c, double out[3]) {
+    const long x[4] = { a - 2, a - 1, b + 1, b + 2 };
+    out[0] = out[1] = out[2] = 0.0;
+    for (int i = 0; i < 4; ++i)
+    {
+      double weight = 1.0;
+      for (int j = 0; j < 4; ++j)
+      {
+        weight *= j == i ? 1.0 : static_cast<double>(c - x[j]) / static_cast<double>(x[i] - x[j]);
+      }
+      for (int d = 0; d < 3; ++d)
+      {
+        out[d] += weight * row[3 * x[i] + d];
+      }
+    }
+  };
+  auto   inPlane = [](const double * p, const double q[3]) { return std::hypot(p[0] - q[0], p[1] - q[1]); };
+  size_t moved = 0;
+  for (size_t r = 0; r < rows; ++r)
+  {
+    double * row = mesh.Points.data() + 3 * r * static_cast<size_t>(columns);
+    for (long width = 1; width <= 2; ++width)
+    {
+      for (long a = 3; a + width + 2 < columns; ++a)
+      {
+        const long b = a + width - 1;
+        double     fitted[2][3];
+        bool       off = true;
+        for (long c = a; c <= b && off; ++c)
+        {
+          cubic(row, a, b, c, fitted[c - a]);
+          off = inPlane(row + 3 * c, fitted[c - a]) > limit;
+        }
+        double before[3], after[3];
+        if (!off)
+        {
+          continue;
+        }
+        cubic(row, a - 1, b, a - 1, before);
+        cubic(row, a, b + 1, b + 1, after);
+        if (inPlane(row + 3 * (a - 1), before) > 0.5 * limit || inPlane(row + 3 * (b + 1), after) > 0.5 * limit)
+        {
+          continue;
+        }
+        for (long c = a; c <= b; ++c)
+        {
+          std::copy(fitted[c - a], fitted[c - a] + 3, row + 3 * c);
+          ++moved;
+        }
+      }
+    }
+  }
+  return moved;
+}
+
 std::vector<SheetMidSurfaceReport::OffSheetRun>
 SheetMidSurfaceExtractor::FindOffSheetRuns(const SheetMesh &       mesh,
                                            const SheetVolumeView & volume,

@@ -417,11 +417,14 @@ TraceSeed(const SheetVolumeView &     volume,
     result.Crossings = tracer.FindCrossings(polar, true);
     result.Trace = tracer.TraceAlone(result.Crossings, seed);
     // The same slice turn by turn as minimal paths (TracePaths), kept where it passes
-    // through clearly more of the crossings: where the follower crossed onto the next turn
-    // at a touch and lost the rest of the one it was on.
+    // through clearly more of the crossings (where the follower crossed onto the next turn
+    // at a touch and lost the rest of the one it was on) without running through air for
+    // more than a few voxels (a path cut across a gap, which the follower never does).
     Tracer::Trace paths = tracer.TracePaths(polar, result.Trace, result.Crossings);
     if (!paths.Empty() &&
-        tracer.Explained(result.Crossings, paths) > tracer.Explained(result.Crossings, result.Trace) + PathsPreference)
+        tracer.Explained(result.Crossings, paths) >
+          tracer.Explained(result.Crossings, result.Trace) + PathsPreference &&
+        tracer.LongestAirArc(polar, paths) <= PathAirArc * settings.Voxel)
     {
       result.Trace = std::move(paths);
     }

@@ -699,6 +699,17 @@ Extraction::BuildMesh()
       const double z = mesh.Points[3 * (row * columns + column) + 2];
       return static_cast<size_t>(std::clamp(std::lround(z / sz), 0L, static_cast<long>(nz) - 1));
     };
+    // A column taken onto the neighbouring turn in one row's slices only (the row's window
+    // holds a touch's edge along the axis) leaves the row's curve for a point or two.
+    m_Report.RowSpikesSmoothed =
+      SheetMidSurfaceExtractor::SmoothRowSpikes(mesh, GridStepFraction * m_Report.TurnSpacing);
+    if (m_Report.RowSpikesSmoothed > 0)
+    {
+      std::ostringstream text;
+      text << m_Report.RowSpikesSmoothed << " grid point(s) off their row's curve by more than " << GridStepFraction
+           << " of the turn spacing for one or two columns (a column on the neighbouring turn) were put back on it";
+      m_Report.Warnings.push_back(text.str());
+    }
     m_Report.GridSteps = SheetMidSurfaceExtractor::FindGridSteps(mesh, GridStepFraction * m_Report.TurnSpacing);
     for (auto & step : m_Report.GridSteps)
     {

@@ -84,6 +84,21 @@ Tracer::SnapToCrossings(Trace & trace, const SliceCrossings & crossings) const
 }
 
 double
+Tracer::LongestAirArc(const PolarSlice & polar, const Trace & trace) const
+{
+  double longest = 0.0, run = 0.0;
+  for (long m = trace.First; m <= trace.Last(); ++m)
+  {
+    const double rho = trace.At(m);
+    const long   j = std::lround(rho / polar.Dr);
+    const double v = j >= 0 && j < polar.Samples ? polar.At(m, j) : std::numeric_limits<double>::quiet_NaN();
+    run = std::isfinite(v) && v < MaterialLevel ? run + rho * m_Frame.Step : 0.0;
+    longest = std::max(longest, run);
+  }
+  return longest;
+}
+
+double
 Tracer::TraceSpacing(const Trace & trace, long m) const
 {
   double spacing = 0.0;

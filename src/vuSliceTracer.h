@@ -50,6 +50,10 @@ constexpr double SplitWidth = 1.6;
 constexpr double SplitMass = 1.6;
 // The next crossing is accepted within this fraction of the local turn spacing.
 constexpr double AcceptWindow = 0.4;
+// A seed slice's minimal paths are kept only where they run through air (within the scan's
+// data) along no longer an arc than this many voxels: a path does not stop where the sheet
+// does, and across a touch or round a turn's end it may cut through the gap between turns.
+constexpr double PathAirArc = 4.0;
 // Rays on which the seed slice's trace is started (at three depths each).
 constexpr long AloneRays = 8;
 // Voxels from the edge of the scan's data within which the intensities are not trusted.
@@ -281,6 +285,11 @@ public:
   // from the inner one, between the two sheets, while the split band has a crossing on each.
   void
   SnapToCrossings(Trace & trace, const SliceCrossings & crossings) const;
+
+  // The longest arc (mm) along which a trace runs through air within the scan's data: its
+  // radius on a sample of `polar` below MaterialLevel of the contrast.
+  double
+  LongestAirArc(const PolarSlice & polar, const Trace & trace) const;
 
   // Local maxima of a profile (fraction of the contrast) that rise above air by PeakLevel of the contrast and stand out
   // of their dips by PeakProminence; each placed at the centroid of its upper half.

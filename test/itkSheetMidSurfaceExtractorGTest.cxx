@@ -406,6 +406,69 @@ TEST(SheetMidSurfaceExtractor, GridStepsNameAMeshThatJumpsATurn)
   EXPECT_GT(alongAxis, 0u);
 }
 
+TEST(SheetMidSurfaceExtractor, RowSpikesArePutBackButARowOnAnotherTurnIsNot)
+{
+  // A grid on the spiral r = 12 + 6 theta / (2 pi) (turn spacing 6), 8 rows one apart,
+  // columns three voxels apart along 2.5 turns.
+  auto                radius = [](double theta) { return 12.0 + 6.0 * theta / (2.0 * Pi); };
+  std::vector<double> theta{ 0.0 };
+  while (theta.back() < 5.0 * Pi)
+  {
+    theta.push_back(theta.back() + 3.0 / radius(theta.back()));
+  }
+  const int      rows = 8;
+  const auto     columns = static_cast<int>(theta.size());
+  itk::SheetMesh mesh;
+  mesh.GridRows = rows;
+  mesh.GridColumns = columns;
+  for (int r = 0; r < rows; ++r)
+  {
+    for (int c = 0; c < columns; ++c)
+    {
+      mesh.Points.insert(mesh.Points.end(),
+                         { radius(theta[c]) * std::cos(theta[c]), radius(theta[c]) * std::sin(theta[c]), 1.0 * r });
+      mesh.GridIndex.insert(mesh.GridIndex.end(), { r, c });
+    }
+  }
+  const std::vector<double> truth = mesh.Points;
+  EXPECT_EQ(itk::SheetMidSurfaceExtractor::SmoothRowSpikes(mesh, 0.7 * 6.0), 0u);
+  EXPECT_EQ(mesh.Points, truth);
+
+  // Points pushed a turn spacing outwards, onto the next turn: one in row 1, two side by side
+  // in row 3, three side by side in row 4 (a stretch, not a spike), and from column 20 to the
+  // end of row 6 (a row that crossed onto the next turn and stays there).
+  auto push = [&](int r, int from, int to) {
+    for (int c = from; c <= to; ++c)
+    {
+      const size_t p = static_cast<size_t>(r * columns + c);
+      mesh.Points[3 * p] += 6.0 * std::cos(theta[c]);
+      mesh.Points[3 * p + 1] += 6.0 * std::sin(theta[c]);
+    }
+  };
+  push(1, 12, 12);
+  push(3, 25, 26);
+  push(4, 30, 32);
+  push(6, 20, columns - 1);
+  const std::vector<double> pushed = mesh.Points;
+  EXPECT_EQ(itk::SheetMidSurfaceExtractor::SmoothRowSpikes(mesh, 0.7 * 6.0), 3u);
+  double farthest = 0.0;
+  for (const auto & [r, c] : { std::pair{ 1, 12 }, { 3, 25 }, { 3, 26 } })
+  {
+    const size_t p = static_cast<size_t>(r * columns + c);
+    farthest =
+      std::max(farthest, std::hypot(mesh.Points[3 * p] - truth[3 * p], mesh.Points[3 * p + 1] - truth[3 * p + 1]));
+    mesh.Points[3 * p] = pushed[3 * p];
+    mesh.Points[3 * p + 1] = pushed[3 * p + 1];
+    mesh.Points[3 * p + 2] = pushed[3 * p + 2];
+  }
+  std::cout << "spikes put back within " << farthest << " voxel of the spiral" << std::endl;
+  EXPECT_LT(farthest, 0.1);
+  // Nothing else moved: the three-point stretch and the row on the next turn are left for
+  // FindGridSteps to name.
+  EXPECT_EQ(mesh.Points, pushed);
+  EXPECT_FALSE(itk::SheetMidSurfaceExtractor::FindGridSteps(mesh, 0.7 * 6.0).empty());
+}
+
 TEST(SheetMidSurfaceExtractor, OffSheetRunsNameAMeshTracedBetweenTurns)
 {
   // The spiral's mask as intensities (air 0, sheet 1): the mesh traced on it lies on the

@@ -298,6 +298,7 @@ TraceJson(const itk::SheetMidSurfaceReport & report)
   {
     json["turns"] = report.Turns;
     json["turn_spacing_mm"] = report.TurnSpacing;
+    json["row_spikes_smoothed"] = report.RowSpikesSmoothed;
     json["mean_confidence"] = count > 0 ? sum / static_cast<double>(count) : 0.0;
   }
   return json;
