@@ -165,11 +165,17 @@ MassSpringSheetFlattener::BuildSystem(const SheetMesh &                      mes
     addSpring(edges[e], edges[e + 1], 1.0);
   }
 
-  std::unordered_set<uint64_t> edgeSet;
-  edgeSet.reserve(edges.size());
+  // The mesh's edges as sorted keys (ComputeEdges lists them in key order): a binary search
+  // is faster than a hash set of millions of edges to build.
+  std::vector<uint64_t> edgeKeys(edges.size() / 2);
   for (size_t e = 0; e < edges.size(); e += 2)
   {
-    edgeSet.insert(EdgeKey(edges[e], edges[e + 1]));
+    edgeKeys[e / 2] = EdgeKey(edges[e], edges[e + 1]);
+  }
+  const auto isEdge = [&edgeKeys](uint64_t key) { return std::binary_search(edgeKeys.begin(), edgeKeys.end(), key); };
+  if (!std::is_sorted(edgeKeys.begin(), edgeKeys.end()))
+  {
+    std::sort(edgeKeys.begin(), edgeKeys.end());
   }
   if (mesh.IsGridStructured())
   {
@@ -187,7 +193,7 @@ MassSpringSheetFlattener::BuildSystem(const SheetMesh &                      mes
           // Shear: whichever quad diagonal the triangulation did not use.
           for (auto [a, b] : { std::pair<int64_t, int64_t>{ p00, p11 }, { p01, p10 } })
           {
-            if (!edgeSet.count(EdgeKey(static_cast<uint32_t>(a), static_cast<uint32_t>(b))))
+            if (!isEdge(EdgeKey(static_cast<uint32_t>(a), static_cast<uint32_t>(b))))
             {
               addSpring(static_cast<uint32_t>(a), static_cast<uint32_t>(b), parameters.ShearStiffnessRatio);
             }
@@ -226,7 +232,7 @@ MassSpringSheetFlattener::BuildSystem(const SheetMesh &                      mes
       if (opposite[k].first == opposite[k + 1].first && opposite[k].second != opposite[k + 1].second)
       {
         const uint64_t key = EdgeKey(opposite[k].second, opposite[k + 1].second);
-        if (!edgeSet.count(key) && added.insert(key).second)
+        if (!isEdge(key) && added.insert(key).second)
         {
           addSpring(opposite[k].second, opposite[k + 1].second, parameters.ShearStiffnessRatio);
         }
@@ -584,7 +590,6 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   }
   m_Report.CoarseningFactor = factor;
   m_Report.SimulatedParticles = simulated.GetNumberOfPoints();
-
   // Held particles, in the simulated level's numbering.
   const std::vector<uint32_t> locked = HeldParticles(p, simulated, n, factor, fineIds);
 

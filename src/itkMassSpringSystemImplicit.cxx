@@ -44,12 +44,17 @@ MassSpringSystem::ImplicitSolver::Factorise(const MassSpringSystem & system, dou
       freeParticles.push_back(static_cast<uint32_t>(i));
     }
   }
-  const auto                          nf = static_cast<Eigen::Index>(freeParticles.size());
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(nf + 4 * system.m_SpringI.size());
+  const auto nf = static_cast<Eigen::Index>(freeParticles.size());
+  // The lower triangle (all that either factorisation, Eigen::Lower, reads), column by
+  // column, straight from the springs: each spring between free particles is one entry of
+  // the column of its lower index; its stiffness is added to both ends' diagonals, also
+  // where the other end is held. Entries are summed in spring order, as Eigen's
+  // setFromTriplets sums duplicates, so the matrix is the same to the last bit.
+  std::vector<double>       diagonal(static_cast<size_t>(nf));
+  std::vector<Eigen::Index> start(static_cast<size_t>(nf) + 1, 0);
   for (Eigen::Index r = 0; r < nf; ++r)
   {
-    triplets.emplace_back(r, r, system.m_Masses[freeParticles[r]] * invH2);
+    diagonal[r] = system.m_Masses[freeParticles[r]] * invH2;
   }
   for (size_t s = 0; s < system.m_SpringI.size(); ++s)
   {
@@ -58,20 +63,67 @@ MassSpringSystem::ImplicitSolver::Factorise(const MassSpringSystem & system, dou
     const double  k = system.m_Stiffness[s];
     if (a >= 0)
     {
-      triplets.emplace_back(a, a, k);
+      diagonal[a] += k;
     }
     if (b >= 0)
     {
-      triplets.emplace_back(b, b, k);
+      diagonal[b] += k;
     }
-    if (a >= 0 && b >= 0)
+    if (a >= 0 && b >= 0 && a != b)
     {
-      triplets.emplace_back(a, b, -k);
-      triplets.emplace_back(b, a, -k);
+      ++start[std::min(a, b) + 1];
     }
   }
-  SparseMatrix A(nf, nf);
-  A.setFromTriplets(triplets.begin(), triplets.end());
+  for (Eigen::Index c = 0; c < nf; ++c)
+  {
+    start[c + 1] += start[c] + 1; // and the diagonal, first in its column
+  }
+  std::vector<int32_t>      row(static_cast<size_t>(start[nf]));
+  std::vector<double>       value(row.size());
+  std::vector<Eigen::Index> fill(start.begin(), start.end() - 1);
+  for (Eigen::Index c = 0; c < nf; ++c)
+  {
+    row[fill[c]] = static_cast<int32_t>(c);
+    value[fill[c]++] = diagonal[c];
+  }
+  for (size_t s = 0; s < system.m_SpringI.size(); ++s)
+  {
+    const int32_t a = freeIndex[system.m_SpringI[s]];
+    const int32_t b = freeIndex[system.m_SpringJ[s]];
+    if (a >= 0 && b >= 0 && a != b)
+    {
+      const int32_t c = std::min(a, b);
+      row[fill[c]] = std::max(a, b);
+      value[fill[c]++] = -system.m_Stiffness[s];
+    }
+  }
+  // Each column's entries by row, duplicates (two springs joining one pair) summed in order.
+  using Index = SparseMatrix::StorageIndex;
+  std::vector<Index>  outer(static_cast<size_t>(nf) + 1, 0);
+  std::vector<Index>  inner;
+  std::vector<double> entries;
+  inner.reserve(row.size());
+  entries.reserve(row.size());
+  std::vector<size_t> order;
+  for (Eigen::Index c = 0; c < nf; ++c)
+  {
+    order.resize(static_cast<size_t>(start[c + 1] - start[c]));
+    std::iota(order.begin(), order.end(), static_cast<size_t>(start[c]));
+    std::stable_sort(order.begin(), order.end(), [&row](size_t x, size_t y) { return row[x] < row[y]; });
+    for (size_t i = 0; i < order.size(); ++i)
+    {
+      if (i > 0 && row[order[i]] == row[order[i - 1]])
+      {
+        entries.back() += value[order[i]];
+        continue;
+      }
+      inner.push_back(static_cast<Index>(row[order[i]]));
+      entries.push_back(value[order[i]]);
+    }
+    outer[c + 1] = static_cast<Index>(inner.size());
+  }
+  const SparseMatrix A = Eigen::Map<const SparseMatrix>(
+    nf, nf, static_cast<Eigen::Index>(inner.size()), outer.data(), inner.data(), entries.data());
   if (!analysed)
   {
     factorisation.analyzePattern(A);
@@ -161,23 +213,35 @@ MassSpringSystem::StepImplicit(bool quasiStatic)
       }
     });
     // A sheet lying on a coordinate plane (the final relaxation) has a zero column: skip it;
-    // otherwise the three columns are solved together (one pass over the factor).
-    if (!rhs.col(0).isZero(0.0) && !rhs.col(1).isZero(0.0) && !rhs.col(2).isZero(0.0))
+    // the others are solved together (one pass over the factor, which on a large mesh is
+    // far larger than the caches, instead of one per column).
+    std::vector<int> live;
+    for (int d = 0; d < 3; ++d)
+    {
+      if (rhs.col(d).isZero(0.0))
+      {
+        solution.col(d).setZero();
+      }
+      else
+      {
+        live.push_back(d);
+      }
+    }
+    if (live.size() == 3)
     {
       solution = solver.factorisation.solve(rhs);
     }
-    else
+    else if (!live.empty())
     {
-      for (int d = 0; d < 3; ++d)
+      Eigen::MatrixXd part(nf, static_cast<Eigen::Index>(live.size()));
+      for (size_t k = 0; k < live.size(); ++k)
       {
-        if (rhs.col(d).isZero(0.0))
-        {
-          solution.col(d).setZero();
-        }
-        else
-        {
-          solution.col(d) = solver.factorisation.solve(rhs.col(d));
-        }
+        part.col(static_cast<Eigen::Index>(k)) = rhs.col(live[k]);
+      }
+      const Eigen::MatrixXd solved = solver.factorisation.solve(part);
+      for (size_t k = 0; k < live.size(); ++k)
+      {
+        solution.col(live[k]) = solved.col(static_cast<Eigen::Index>(k));
       }
     }
     for (Eigen::Index r = 0; r < nf; ++r)
