@@ -140,7 +140,32 @@ RasteriseTriangle(TexturePixelMap &           map,
   for (auto row = static_cast<SizeValueType>(std::max(0.0, r0)); static_cast<double>(row) <= r1; ++row)
   {
     const double y = map.Origin[1] + row * pixelSize;
-    for (SizeValueType column = c0; static_cast<double>(column) <= c1; ++column)
+    // The row's line crosses the triangle between the crossings of its edges; only the
+    // columns there, widened by a pixel each side for rounding, can pass the barycentric
+    // test below (which still decides, so the covered pixels are exactly those of the
+    // whole bounding box).
+    double         xl = std::numeric_limits<double>::infinity(), xr = -xl;
+    const double * corner[3] = { a, p, c };
+    for (int e = 0; e < 3; ++e)
+    {
+      const double * u = corner[e];
+      const double * w = corner[(e + 1) % 3];
+      if ((u[1] <= y && y <= w[1]) || (w[1] <= y && y <= u[1]))
+      {
+        const double dy = w[1] - u[1];
+        const double x = dy != 0.0 ? u[0] + (y - u[1]) * (w[0] - u[0]) / dy : u[0];
+        xl = std::min({ xl, x, dy != 0.0 ? x : w[0] });
+        xr = std::max({ xr, x, dy != 0.0 ? x : w[0] });
+      }
+    }
+    SizeValueType first = c0;
+    double        last = c1;
+    if (xl <= xr)
+    {
+      first = std::max(c0, static_cast<SizeValueType>(std::max(0.0, std::floor((xl - map.Origin[0]) * inverse) - 1.0)));
+      last = std::min(c1, std::ceil((xr - map.Origin[0]) * inverse) + 1.0);
+    }
+    for (SizeValueType column = first; static_cast<double>(column) <= last; ++column)
     {
       const double x = map.Origin[0] + column * pixelSize;
       const double vx = x - a[0], vy = y - a[1];
