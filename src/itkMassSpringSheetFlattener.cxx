@@ -173,10 +173,6 @@ MassSpringSheetFlattener::BuildSystem(const SheetMesh &                      mes
     edgeKeys[e / 2] = EdgeKey(edges[e], edges[e + 1]);
   }
   const auto isEdge = [&edgeKeys](uint64_t key) { return std::binary_search(edgeKeys.begin(), edgeKeys.end(), key); };
-  if (!std::is_sorted(edgeKeys.begin(), edgeKeys.end()))
-  {
-    std::sort(edgeKeys.begin(), edgeKeys.end());
-  }
   if (mesh.IsGridStructured())
   {
     const std::vector<int64_t> lookup = CoarseToFine::GridLookup(mesh);

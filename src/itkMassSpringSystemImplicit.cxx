@@ -46,10 +46,11 @@ MassSpringSystem::ImplicitSolver::Factorise(const MassSpringSystem & system, dou
   }
   const auto nf = static_cast<Eigen::Index>(freeParticles.size());
   // The lower triangle (all that either factorisation, Eigen::Lower, reads), column by
-  // column, straight from the springs: each spring between free particles is one entry of
-  // the column of its lower index; its stiffness is added to both ends' diagonals, also
-  // where the other end is held. Entries are summed in spring order, as Eigen's
-  // setFromTriplets sums duplicates, so the matrix is the same to the last bit.
+  // column, straight from the springs: each spring between free particles (AddSpring
+  // refuses one from a particle to itself) is one entry of the column of its lower index;
+  // its stiffness is added to both ends' diagonals, also where the other end is held.
+  // Entries are summed in spring order, as Eigen's setFromTriplets sums duplicates, so the
+  // matrix is the same to the last bit.
   std::vector<double>       diagonal(static_cast<size_t>(nf));
   std::vector<Eigen::Index> start(static_cast<size_t>(nf) + 1, 0);
   for (Eigen::Index r = 0; r < nf; ++r)
@@ -69,7 +70,7 @@ MassSpringSystem::ImplicitSolver::Factorise(const MassSpringSystem & system, dou
     {
       diagonal[b] += k;
     }
-    if (a >= 0 && b >= 0 && a != b)
+    if (a >= 0 && b >= 0)
     {
       ++start[std::min(a, b) + 1];
     }
@@ -90,7 +91,7 @@ MassSpringSystem::ImplicitSolver::Factorise(const MassSpringSystem & system, dou
   {
     const int32_t a = freeIndex[system.m_SpringI[s]];
     const int32_t b = freeIndex[system.m_SpringJ[s]];
-    if (a >= 0 && b >= 0 && a != b)
+    if (a >= 0 && b >= 0)
     {
       const int32_t c = std::min(a, b);
       row[fill[c]] = std::max(a, b);
