@@ -19,6 +19,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -29,11 +31,29 @@ namespace {
 // WindowSpread standard deviations of the rank's expected place in the sample.
 constexpr size_t SampleSize = 8192;
 constexpr double WindowSpread = 4.0;
+// Counts kept in 32-bit lanes of four are added up every this many values.
+constexpr size_t LaneCountLimit = size_t{ 1 } << 30;
 
 bool
 Finite(float v)
 {
   return std::abs(v) <= std::numeric_limits<float>::max(); // false for NaN and infinities
+}
+
+// Four floats and four 32-bit masks (the compiler's vector extension).
+using Vector = float __attribute__((vector_size(16)));
+using Mask = int32_t __attribute__((vector_size(16)));
+
+float
+Magnitude(float v)
+{
+  return std::abs(v);
+}
+
+Vector
+Magnitude(Vector v)
+{
+  return reinterpret_cast<Vector>(reinterpret_cast<Mask>(v) & 0x7fffffff);
 }
 } // namespace
 
@@ -41,7 +61,27 @@ FiniteRanks::FiniteRanks(const float * values, size_t count)
   : m_Values(values)
   , m_Size(count)
 {
-  m_Finite = static_cast<size_t>(std::count_if(values, values + count, Finite));
+  // Four at a time: |v| <= largest is false for NaN and infinities.
+  const float  largest = std::numeric_limits<float>::max();
+  const Vector top = { largest, largest, largest, largest };
+  size_t       i = 0;
+  while (i + 4 <= count)
+  {
+    // Lane counts added up every LaneCountLimit values, before a 32-bit lane can overflow.
+    const size_t end = std::min(count, i + LaneCountLimit) / 4 * 4;
+    Mask         finite = { 0, 0, 0, 0 };
+    for (; i < end; i += 4)
+    {
+      Vector v;
+      std::memcpy(&v, values + i, sizeof(v));
+      finite -= Magnitude(v) <= top;
+    }
+    for (size_t l = 0; l < 4; ++l)
+    {
+      m_Finite += static_cast<size_t>(finite[l]);
+    }
+  }
+  m_Finite += static_cast<size_t>(std::count_if(values + i, values + count, Finite));
   Sample();
 }
 
@@ -67,11 +107,11 @@ FiniteRanks::Transformed(TBody && body) const
 {
   if (m_Deviation)
   {
-    body([c = m_Centre](float v) { return std::abs(v - c); });
+    body([c = m_Centre](auto v) { return Magnitude(v - c); });
   }
   else
   {
-    body([](float v) { return v; });
+    body([](auto v) { return v; });
   }
 }
 
@@ -99,52 +139,46 @@ FiniteRanks::Quantiles(const std::vector<double> & q) const
   {
     throw std::out_of_range("FiniteRanks: no finite value");
   }
-  const auto         s = static_cast<double>(m_Sample.size());
-  std::vector<float> result;
-  for (const double p : q)
+  // Each rank's window of values from the sample (the whole line where the sample is too
+  // small to say).
+  const auto          s = static_cast<double>(m_Sample.size());
+  std::vector<Window> windows(q.size(), Window{ -Infinity, Infinity, 0, {} });
+  for (size_t j = 0; j < q.size(); ++j)
   {
-    const size_t rank = std::min(m_Finite - 1, static_cast<size_t>(p * static_cast<double>(m_Finite - 1) + 0.5));
-    // The rank's window of values from the sample (the whole line where the sample is too
-    // small to say).
-    float lo = -Infinity, hi = Infinity;
+    const double p = q[j];
     if (m_Sample.size() >= 64)
     {
       const double place = p * (s - 1.0), reach = WindowSpread * std::sqrt(s * p * (1.0 - p) + 1.0) + 1.0;
       if (place - reach >= 0.0)
       {
-        lo = m_Sample[static_cast<size_t>(place - reach)];
+        windows[j].Low = m_Sample[static_cast<size_t>(place - reach)];
       }
       if (place + reach <= s - 1.0)
       {
-        hi = m_Sample[static_cast<size_t>(place + reach)];
+        windows[j].High = m_Sample[static_cast<size_t>(place + reach)];
       }
     }
-    // One pass that counts the values below the window and keeps those in it, without a
-    // data-dependent branch (half the values lie below a median, and a mispredicted branch
-    // costs more than the rest of the loop): each value is written to a block and kept by
-    // advancing the block's end when it lies in the window.
-    size_t             below = 0;
-    std::vector<float> kept;
-    Transformed([&](auto transform) {
-      constexpr size_t Block = 1024;
-      float            block[Block];
-      size_t           k = 0;
-      for (size_t i = 0; i < m_Size; ++i)
+  }
+  // One pass for every two ranks: counts the values below each window and keeps those in it.
+  Transformed([&](auto transform) {
+    for (size_t j = 0; j < windows.size(); j += 2)
+    {
+      if (j + 1 < windows.size())
       {
-        const float    v = transform(m_Values[i]);
-        const unsigned finite = Finite(v) ? 1u : 0u;
-        const unsigned under = v < lo ? 1u : 0u, over = v > hi ? 1u : 0u;
-        below += finite & under;
-        block[k] = v;
-        k += finite & (1u - (under | over));
-        if (k == Block)
-        {
-          kept.insert(kept.end(), block, block + Block);
-          k = 0;
-        }
+        CountAndKeep<2>(transform, &windows[j]);
       }
-      kept.insert(kept.end(), block, block + k);
-    });
+      else
+      {
+        CountAndKeep<1>(transform, &windows[j]);
+      }
+    }
+  });
+  std::vector<float> result;
+  for (size_t j = 0; j < q.size(); ++j)
+  {
+    const size_t rank = std::min(m_Finite - 1, static_cast<size_t>(q[j] * static_cast<double>(m_Finite - 1) + 0.5));
+    size_t       below = windows[j].Below;
+    std::vector<float> & kept = windows[j].Kept;
     if (rank < below || rank >= below + kept.size())
     {
       // The sample misled (values crowded or ordered against the sampling stride): all of them.
@@ -165,6 +199,89 @@ FiniteRanks::Quantiles(const std::vector<double> & q) const
     result.push_back(*at);
   }
   return result;
+}
+
+template <size_t TWindows, typename TTransform>
+void
+FiniteRanks::CountAndKeep(TTransform transform, Window * windows) const
+{
+  // Four values at a time (SSE2 or the target's equivalent, through the compiler's vector
+  // extension), without a data-dependent branch (the values in a window are scattered, and
+  // a mispredicted branch costs more than the rest of the loop): the values below a window
+  // counted lane by lane; each value is written to the window's block, whose end advances
+  // when it lies in the window.
+  constexpr size_t Lanes = 4;
+  constexpr size_t Block = 1024;
+  const float      largest = std::numeric_limits<float>::max();
+  const Vector     top = { largest, largest, largest, largest };
+  Vector           low[TWindows], high[TWindows];
+  Mask             below[TWindows];
+  float            block[TWindows][Block + Lanes];
+  size_t           k[TWindows];
+  for (size_t j = 0; j < TWindows; ++j)
+  {
+    const float lo = windows[j].Low, hi = windows[j].High;
+    low[j] = Vector{ lo, lo, lo, lo };
+    high[j] = Vector{ hi, hi, hi, hi };
+    below[j] = Mask{ 0, 0, 0, 0 };
+    k[j] = 0;
+  }
+  size_t i = 0;
+  while (i + Lanes <= m_Size)
+  {
+    // Lane counts added up every LaneCountLimit values, before a 32-bit lane can overflow.
+    const size_t end = std::min(m_Size, i + LaneCountLimit) / Lanes * Lanes;
+    for (; i < end; i += Lanes)
+    {
+      Vector raw;
+      std::memcpy(&raw, m_Values + i, sizeof(raw));
+      const Vector v = transform(raw);
+      const Mask   finite = Magnitude(v) <= top; // false for NaN and infinities
+      for (size_t j = 0; j < TWindows; ++j)
+      {
+        const Mask under = v < low[j];
+        below[j] -= finite & under;
+        const Mask inside = finite & ~under & (v <= high[j]);
+        for (size_t l = 0; l < Lanes; ++l)
+        {
+          block[j][k[j]] = v[l];
+          k[j] += static_cast<size_t>(inside[l] & 1);
+        }
+        if (k[j] >= Block)
+        {
+          windows[j].Kept.insert(windows[j].Kept.end(), block[j], block[j] + k[j]);
+          k[j] = 0;
+        }
+      }
+    }
+    for (size_t j = 0; j < TWindows; ++j)
+    {
+      for (size_t l = 0; l < Lanes; ++l)
+      {
+        windows[j].Below += static_cast<size_t>(below[j][l]);
+      }
+      below[j] = Mask{ 0, 0, 0, 0 };
+    }
+  }
+  for (size_t j = 0; j < TWindows; ++j)
+  {
+    windows[j].Kept.insert(windows[j].Kept.end(), block[j], block[j] + k[j]);
+  }
+  for (; i < m_Size; ++i)
+  {
+    const float v = transform(m_Values[i]);
+    for (size_t j = 0; j < TWindows; ++j)
+    {
+      if (Finite(v) && v < windows[j].Low)
+      {
+        ++windows[j].Below;
+      }
+      else if (Finite(v) && v <= windows[j].High)
+      {
+        windows[j].Kept.push_back(v);
+      }
+    }
+  }
 }
 } // namespace detail
 } // end namespace itk

@@ -27,8 +27,8 @@ namespace detail {
  * left out), or of their absolute deviations |v - centre|, by sampled selection (Floyd and
  * Rivest, "Expected time bounds for selection", CACM 18(3), 1975): a regular sample of
  * about 8192 values, sorted, brackets each rank asked for between two of its values; one
- * pass over the data per rank counts the values below the bracket and keeps those inside
- * it, and the rank is selected among those few. Where the bracket misses (the sample
+ * pass over the data for every two ranks asked counts the values below each bracket and
+ * keeps those inside it, and each rank is selected among those few. Where the bracket misses (the sample
  * misled), the rank is selected among all values. Exactly the values std::nth_element over
  * a copy gives, whatever the data's order, without copying it. The data must outlive the
  * object. */
@@ -59,6 +59,16 @@ public:
   }
 
 private:
+  /** A rank's window of values (from the sample), the count of finite values below it and
+   * the values in it. */
+  struct Window
+  {
+    float              Low;
+    float              High;
+    size_t             Below;
+    std::vector<float> Kept;
+  };
+
   FiniteRanks(const float * values, size_t count, size_t finite, float centre);
   void
   Sample();
@@ -66,6 +76,10 @@ private:
   template <typename TBody>
   void
   Transformed(TBody && body) const;
+  /** One pass over the values, mapped by `transform`, for TWindows windows. */
+  template <size_t TWindows, typename TTransform>
+  void
+  CountAndKeep(TTransform transform, Window * windows) const;
 
   const float *      m_Values;
   size_t             m_Size;
