@@ -24,10 +24,45 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
+#include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace itk {
 class ProcessObject;
+
+namespace detail {
+/** A std::allocator whose value-initialisation of a new element leaves it uninitialised:
+ * the pixel map's buffers are filled by the threads that then write them, each its own band
+ * of rows, instead of zeroed by one thread first. */
+template <typename T>
+struct DefaultInitAllocator : std::allocator<T>
+{
+  template <typename U>
+  struct rebind
+  {
+    using other = DefaultInitAllocator<U>;
+  };
+  DefaultInitAllocator() noexcept = default;
+  template <typename U>
+  DefaultInitAllocator(const DefaultInitAllocator<U> &) noexcept
+  {}
+  template <typename U>
+  void
+  construct(U * p) noexcept(std::is_nothrow_default_constructible<U>::value)
+  {
+    ::new (static_cast<void *>(p)) U;
+  }
+  template <typename U, typename... TArguments>
+  void
+  construct(U * p, TArguments &&... arguments)
+  {
+    ::new (static_cast<void *>(p)) U(std::forward<TArguments>(arguments)...);
+  }
+};
+} // namespace detail
 
 /** \class TexturePixelMap
  * \brief Where to sample the volume for each pixel of a flattened texture: the 3D point on
@@ -46,12 +81,12 @@ class ProcessObject;
  */
 struct VirtualUnwrapping_EXPORT TexturePixelMap
 {
-  std::array<SizeValueType, 2> Size{ { 0, 0 } };
-  std::array<double, 2>        Origin{ { 0.0, 0.0 } };
-  double                       PixelSize{ 1.0 };
-  std::vector<float>           Positions;
-  std::vector<float>           Normals;
-  std::vector<int32_t>         Triangle;
+  std::array<SizeValueType, 2>                                Size{ { 0, 0 } };
+  std::array<double, 2>                                       Origin{ { 0.0, 0.0 } };
+  double                                                      PixelSize{ 1.0 };
+  std::vector<float, detail::DefaultInitAllocator<float>>     Positions;
+  std::vector<float, detail::DefaultInitAllocator<float>>     Normals;
+  std::vector<int32_t, detail::DefaultInitAllocator<int32_t>> Triangle;
   /** Triangles skipped because their 3D or flat area is (numerically) zero. */
   SizeValueType NumberOfDegenerateTriangles{ 0 };
   /** Pixels inside a triangle whose interpolated vertex normal vanishes: left off the

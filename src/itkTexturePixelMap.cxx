@@ -222,9 +222,10 @@ ComputeTexturePixelMap(const SheetMesh & surface,
   }
   TexturePixelMap     map = ComputeTextureGrid(flat, pixelSize, margin);
   const SizeValueType rows = map.Size[1];
-  map.Positions.assign(3 * map.GetNumberOfPixels(), 0.0f);
-  map.Normals.assign(3 * map.GetNumberOfPixels(), 0.0f);
-  map.Triangle.assign(map.GetNumberOfPixels(), -1);
+  // Left uninitialised here: each band's work unit fills its rows before it rasterises them.
+  map.Positions.resize(3 * map.GetNumberOfPixels());
+  map.Normals.resize(3 * map.GetNumberOfPixels());
+  map.Triangle.resize(map.GetNumberOfPixels());
 
   const std::vector<double>   normals = surface.ComputeVertexNormals();
   const std::array<double, 4> b = FlatBounds(flat);
@@ -287,6 +288,10 @@ ComputeTexturePixelMap(const SheetMesh & surface,
       }
       const SizeValueType bandFirst = band * RowsPerBand;
       const SizeValueType bandLast = std::min(rows, bandFirst + RowsPerBand) - 1;
+      const SizeValueType first = bandFirst * map.Size[0], end = (bandLast + 1) * map.Size[0];
+      std::fill(map.Positions.begin() + 3 * first, map.Positions.begin() + 3 * end, 0.0f);
+      std::fill(map.Normals.begin() + 3 * first, map.Normals.begin() + 3 * end, 0.0f);
+      std::fill(map.Triangle.begin() + first, map.Triangle.begin() + end, -1);
       for (const uint32_t t : bandTriangles[band])
       {
         RasteriseTriangle(map, surface, flat, normals, t, bandFirst, bandLast, pixelSize);

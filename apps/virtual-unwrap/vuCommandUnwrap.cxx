@@ -241,16 +241,49 @@ template <typename TImage>
 typename TImage::Pointer
 FlipRows(const TImage * image)
 {
-  auto flip = itk::FlipImageFilter<TImage>::New();
-  flip->SetInput(image);
-  typename itk::FlipImageFilter<TImage>::FlipAxesArrayType axes;
-  axes.Fill(false);
-  axes[1] = true;
-  flip->SetFlipAxes(axes);
-  flip->FlipAboutOriginOff();
-  flip->Update();
-  typename TImage::Pointer result = flip->GetOutput();
-  result->DisconnectPipeline();
+  const auto & region = image->GetLargestPossibleRegion();
+  if (region.GetIndex() != typename TImage::IndexType() || image->GetBufferedRegion() != region)
+  {
+    auto flip = itk::FlipImageFilter<TImage>::New();
+    flip->SetInput(image);
+    typename itk::FlipImageFilter<TImage>::FlipAxesArrayType axes;
+    axes.Fill(false);
+    axes[1] = true;
+    flip->SetFlipAxes(axes);
+    flip->FlipAboutOriginOff();
+    flip->Update();
+    typename TImage::Pointer result = flip->GetOutput();
+    result->DisconnectPipeline();
+    return result;
+  }
+  // The same image as itk::FlipImageFilter about axis 1 (not about the origin) gives: the
+  // last row first, starting where the last row lay, the axis's direction reversed; rows
+  // copied whole.
+  auto result = TImage::New();
+  result->CopyInformation(image);
+  result->SetRegions(region);
+  typename TImage::IndexType last = region.GetIndex();
+  last[1] = static_cast<itk::IndexValueType>(region.GetSize(1)) - 1;
+  typename TImage::PointType origin;
+  image->TransformIndexToPhysicalPoint(last, origin);
+  result->SetOrigin(origin);
+  typename TImage::DirectionType reverse;
+  reverse.SetIdentity();
+  reverse[1][1] = -1.0;
+  result->SetDirection(image->GetDirection() * reverse);
+  result->Allocate();
+  const itk::SizeValueType columns = region.GetSize(0), rows = region.GetSize(1);
+  const itk::SizeValueType planes = region.GetNumberOfPixels() / (columns * rows);
+  const auto *             in = image->GetBufferPointer();
+  auto *                   out = result->GetBufferPointer();
+  for (itk::SizeValueType plane = 0; plane < planes; ++plane)
+  {
+    for (itk::SizeValueType row = 0; row < rows; ++row)
+    {
+      const auto * from = in + (plane * rows + rows - 1 - row) * columns;
+      std::copy(from, from + columns, out + (plane * rows + row) * columns);
+    }
+  }
   return result;
 }
 
