@@ -73,6 +73,10 @@ public:
 private:
   float
   Trilinear(const double index[3]) const;
+  /** Trilinear() at an index inside the cells (each coordinate in [lower, upper) of a volume
+   * at least 2 voxels long on every axis), without its clamps: the same value. */
+  float
+  TrilinearInside(const double index[3]) const;
 
   const InterpolatorType *           m_Interpolator;
   const typename TImage::PixelType * m_Buffer{ nullptr };
@@ -83,6 +87,10 @@ private:
   double                             m_Origin[3];
   double                             m_Lower[3];
   double                             m_Upper[3];
+  /** At least 2 voxels on every axis (the clamp-free path applies). */
+  bool m_Cells{ false };
+  /** The least and the greatest layer offset. */
+  double m_OffsetRange[2]{ 0.0, 0.0 };
 };
 } // end namespace itk
 

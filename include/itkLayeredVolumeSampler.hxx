@@ -54,6 +54,12 @@ LayeredVolumeSampler<TImage>::LayeredVolumeSampler(const TImage *           volu
     m_Upper[i] = static_cast<double>(region.GetIndex(i) + static_cast<IndexValueType>(region.GetSize(i)) - 1);
     m_Last[i] = static_cast<IndexValueType>(region.GetSize(i)) - 1;
   }
+  m_Cells = m_Last[0] > 0 && m_Last[1] > 0 && m_Last[2] > 0;
+  if (!m_Offsets.empty())
+  {
+    m_OffsetRange[0] = *std::min_element(m_Offsets.begin(), m_Offsets.end());
+    m_OffsetRange[1] = *std::max_element(m_Offsets.begin(), m_Offsets.end());
+  }
   m_Stride[0] = 1;
   m_Stride[1] = region.GetSize(0);
   m_Stride[2] = region.GetSize(0) * region.GetSize(1);
@@ -103,6 +109,31 @@ LayeredVolumeSampler<TImage>::Trilinear(const double index[3]) const
 }
 
 template <typename TImage>
+inline float
+LayeredVolumeSampler<TImage>::TrilinearInside(const double index[3]) const
+{
+  SizeValueType offset = 0;
+  float         f[3];
+  for (unsigned int i = 0; i < 3; ++i)
+  {
+    const double         c = index[i] - m_Lower[i];
+    const IndexValueType base = static_cast<IndexValueType>(c);
+    f[i] = static_cast<float>(c - base);
+    offset += base * m_Stride[i];
+  }
+  const auto *        p = m_Buffer + offset;
+  const auto          at = [p](SizeValueType o) { return static_cast<float>(p[o]); };
+  const SizeValueType s0 = m_Stride[0], s1 = m_Stride[1], s2 = m_Stride[2];
+  const float         c00 = at(0) + f[0] * (at(s0) - at(0));
+  const float         c10 = at(s1) + f[0] * (at(s1 + s0) - at(s1));
+  const float         c01 = at(s2) + f[0] * (at(s2 + s0) - at(s2));
+  const float         c11 = at(s2 + s1) + f[0] * (at(s2 + s1 + s0) - at(s2 + s1));
+  const float         c0 = c00 + f[1] * (c10 - c00);
+  const float         c1 = c01 + f[1] * (c11 - c01);
+  return c0 + f[2] * (c1 - c0);
+}
+
+template <typename TImage>
 unsigned int
 LayeredVolumeSampler<TImage>::Sample(const double point[3], const double normal[3], float * samples) const
 {
@@ -114,6 +145,29 @@ LayeredVolumeSampler<TImage>::Sample(const double point[3], const double normal[
               m_PhysicalToIndex[i][2] * (point[2] - m_Origin[2]);
     step[i] =
       m_PhysicalToIndex[i][0] * normal[0] + m_PhysicalToIndex[i][1] * normal[1] + m_PhysicalToIndex[i][2] * normal[2];
+  }
+  // Where the nearest and the farthest layer lie inside the cells on every axis, so do the
+  // layers between them (each coordinate is monotonic along the normal, and so is its
+  // rounding): no clamp, and none counted.
+  if (m_Buffer != nullptr && m_Cells && !m_Offsets.empty())
+  {
+    bool inside = true;
+    for (unsigned int i = 0; i < 3; ++i)
+    {
+      const double a = base[i] + m_OffsetRange[0] * step[i], b = base[i] + m_OffsetRange[1] * step[i];
+      inside = inside && a >= m_Lower[i] && a < m_Upper[i] && b >= m_Lower[i] && b < m_Upper[i];
+    }
+    if (inside)
+    {
+      for (size_t k = 0; k < m_Offsets.size(); ++k)
+      {
+        const double c[3] = { base[0] + m_Offsets[k] * step[0],
+                              base[1] + m_Offsets[k] * step[1],
+                              base[2] + m_Offsets[k] * step[2] };
+        samples[k] = TrilinearInside(c);
+      }
+      return 0;
+    }
   }
   unsigned int                                   clamped = 0;
   typename InterpolatorType::ContinuousIndexType index;
