@@ -23,20 +23,12 @@
 #include "vuCombineLayers.h"
 #include "vuFiniteRanks.h"
 #include "vuValidRegion.h"
+#include "vuVectorClones.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <vector>
-
-// The smoothing's row loops are compiled twice on x86-64 with GCC, for AVX2 (8 floats a
-// vector) and for the baseline (SSE2, 4), and the loader picks the one the processor runs:
-// the same operations in the same order, value for value.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#  define VU_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#  define VU_VECTOR_CLONES
-#endif
 
 namespace itk {
 namespace {
@@ -106,6 +98,48 @@ NormaliseRow(const float * __restrict line,
   for (long x = 0; x < columns; ++x)
   {
     target[x] = std::isfinite(line[x]) && sw[x] > 0.0f ? sv[x] / sw[x] : NaN;
+  }
+}
+
+float
+MedianOfThree(float a, float b, float c)
+{
+  return std::max(std::min(a, b), std::min(std::max(a, b), c));
+}
+
+// The 3 x 3 median of a row (columns 1 to columns - 2) from the rows above, here and below:
+// each column's three values sorted once (shared by three windows), then the median of nine
+// is the median of (the largest of the lows, the median of the middles, the smallest of the
+// highs). A pixel's check is 0 when its window's nine values are finite (v - v is 0 for
+// finite v only, NaN otherwise); low, middle, high and columnCheck are work rows.
+VU_VECTOR_CLONES void
+MedianOfNineRow(const float * __restrict above,
+                const float * __restrict here,
+                const float * __restrict below,
+                long columns,
+                float * __restrict low,
+                float * __restrict middle,
+                float * __restrict high,
+                float * __restrict columnCheck,
+                float * __restrict check,
+                float * __restrict target)
+{
+  for (long c = 0; c < columns; ++c)
+  {
+    const float a = above[c], b = here[c], d = below[c];
+    columnCheck[c] = (a - a) + (b - b) + (d - d);
+    const float lo = std::min(a, b), hi = std::max(a, b);
+    const float mid = std::min(hi, d);
+    high[c] = std::max(hi, d);
+    low[c] = std::min(lo, mid);
+    middle[c] = std::max(lo, mid);
+  }
+  for (long x = 1; x + 1 < columns; ++x)
+  {
+    check[x] = columnCheck[x - 1] + columnCheck[x] + columnCheck[x + 1];
+    target[x] = MedianOfThree(std::max(std::max(low[x - 1], low[x]), low[x + 1]),
+                              MedianOfThree(middle[x - 1], middle[x], middle[x + 1]),
+                              std::min(std::min(high[x - 1], high[x]), high[x + 1]));
   }
 }
 
@@ -465,47 +499,24 @@ LayerStackTexture::Median(const TextureType * texture, double radius)
       const auto         y = static_cast<long>(row);
       const auto         columns = static_cast<long>(size[0]);
       std::vector<float> window(windowSize);
-      // A 3 x 3 window away from the border and from pixels off the sheet: each column's
-      // three values sorted once (shared by three windows), then the median of nine is the
-      // median of (the largest of the lows, the median of the middles, the smallest of the
-      // highs); whole rows at a time, by minima and maxima, then the other pixels one by one.
-      const bool threeByThree = half[0] == 1 && half[1] == 1 && y > 0 && y + 1 < static_cast<long>(size[1]);
-      const auto median3 = [](float a, float b, float c) {
-        return std::max(std::min(a, b), std::min(std::max(a, b), c));
-      };
-      // A pixel is done here when its check is 0: its window's nine values are finite (v - v
-      // is 0 for finite v only, NaN otherwise).
+      // A 3 x 3 window away from the border and from pixels off the sheet: whole rows at a
+      // time by minima and maxima (MedianOfNineRow; a pixel is done there when its check is
+      // 0), then the other pixels one by one.
+      const bool         threeByThree = half[0] == 1 && half[1] == 1 && y > 0 && y + 1 < static_cast<long>(size[1]);
       std::vector<float> checkRow(columns, NaN);
       if (threeByThree)
       {
-        std::vector<float> lowRow(columns), middleRow(columns), highRow(columns);
-        float * __restrict low = lowRow.data();
-        float * __restrict middle = middleRow.data();
-        float * __restrict high = highRow.data();
-        float * __restrict check = checkRow.data();
-        const float * __restrict above = in + (y - 1) * columns;
-        const float * __restrict here = in + y * columns;
-        const float * __restrict below = in + (y + 1) * columns;
-        std::vector<float> columnCheckRow(columns);
-        float * __restrict columnCheck = columnCheckRow.data();
-        for (long c = 0; c < columns; ++c)
-        {
-          const float a = above[c], b = here[c], d = below[c];
-          columnCheck[c] = (a - a) + (b - b) + (d - d);
-          const float lo = std::min(a, b), hi = std::max(a, b);
-          const float mid = std::min(hi, d);
-          high[c] = std::max(hi, d);
-          low[c] = std::min(lo, mid);
-          middle[c] = std::max(lo, mid);
-        }
-        float * __restrict target = out + y * columns;
-        for (long x = 1; x + 1 < columns; ++x)
-        {
-          check[x] = columnCheck[x - 1] + columnCheck[x] + columnCheck[x + 1];
-          target[x] = median3(std::max(std::max(low[x - 1], low[x]), low[x + 1]),
-                              median3(middle[x - 1], middle[x], middle[x + 1]),
-                              std::min(std::min(high[x - 1], high[x]), high[x + 1]));
-        }
+        std::vector<float> lowRow(columns), middleRow(columns), highRow(columns), columnCheckRow(columns);
+        MedianOfNineRow(in + (y - 1) * columns,
+                        in + y * columns,
+                        in + (y + 1) * columns,
+                        columns,
+                        lowRow.data(),
+                        middleRow.data(),
+                        highRow.data(),
+                        columnCheckRow.data(),
+                        checkRow.data(),
+                        out + y * columns);
       }
       for (long x = 0; x < columns; ++x)
       {

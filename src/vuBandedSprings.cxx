@@ -16,20 +16,13 @@
  *
  *=========================================================================*/
 #include "vuBandedSprings.h"
+#include "vuVectorClones.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
 #include <unordered_map>
-
-// The force loop is compiled twice on x86-64 with GCC, for AVX2 (8 floats a vector) and
-// for the baseline (SSE2, 4), and the loader picks the one the processor runs.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#  define VU_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#  define VU_VECTOR_CLONES
-#endif
 
 namespace vu {
 namespace {

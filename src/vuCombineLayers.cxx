@@ -19,6 +19,7 @@
 // readable-texture candidates): every combination of a stack in one pass over it.
 #include "vuCombineLayers.h"
 #include "itkMultiThreaderBase.h"
+#include "vuVectorClones.h"
 
 #include <algorithm>
 #include <cmath>
@@ -96,6 +97,70 @@ PlanCombinations(unsigned int                                  numberOfLayers,
   return plans;
 }
 
+// The row loops of CombineExtremeRows, compiled twice on x86-64 with GCC, for AVX2 and for
+// the baseline (SSE2), and picked by the loader: the same operations, value for value. Any
+// non-finite sample makes a pixel's check NaN (v - v is 0 for finite v only).
+VU_VECTOR_CLONES void
+StartExtremeRow(const float * __restrict first,
+                SizeValueType columns,
+                float * __restrict extremum,
+                float * __restrict check)
+{
+  for (SizeValueType x = 0; x < columns; ++x)
+  {
+    extremum[x] = first[x];
+    check[x] = first[x] - first[x];
+  }
+}
+
+VU_VECTOR_CLONES void
+AddToExtremeRow(const float * __restrict layer,
+                SizeValueType columns,
+                bool          largest,
+                float * __restrict extremum,
+                float * __restrict check)
+{
+  if (largest)
+  {
+    for (SizeValueType x = 0; x < columns; ++x)
+    {
+      extremum[x] = extremum[x] < layer[x] ? layer[x] : extremum[x];
+      check[x] += layer[x] - layer[x];
+    }
+  }
+  else
+  {
+    for (SizeValueType x = 0; x < columns; ++x)
+    {
+      extremum[x] = layer[x] < extremum[x] ? layer[x] : extremum[x];
+      check[x] += layer[x] - layer[x];
+    }
+  }
+}
+
+VU_VECTOR_CLONES void
+AddToCoreRow(const float * __restrict layer, SizeValueType columns, double * __restrict core)
+{
+  for (SizeValueType x = 0; x < columns; ++x)
+  {
+    core[x] += layer[x];
+  }
+}
+
+VU_VECTOR_CLONES void
+FinishExtremeRow(const float * __restrict extremum,
+                 const float * __restrict check,
+                 const double * __restrict core,
+                 double        coreCount,
+                 SizeValueType columns,
+                 float * __restrict target)
+{
+  for (SizeValueType x = 0; x < columns; ++x)
+  {
+    target[x] = check[x] == 0.0f ? static_cast<float>(extremum[x] - core[x] / coreCount) : NaN;
+  }
+}
+
 // The largest or smallest sample (the usual filters) whole rows at a time, each layer's row
 // read in turn: the same values as CombineSampleBySample.
 void
@@ -112,7 +177,6 @@ CombineExtremeRows(const Image<float, 3> *              stack,
     0,
     size[1],
     [&](SizeValueType row) {
-      // Any non-finite sample makes a pixel's check NaN (v - v is 0 for finite v only).
       std::vector<float>  extremumRow(columns), checkRow(columns);
       std::vector<double> coreRow(columns);
       float * __restrict extremum = extremumRow.data();
@@ -122,46 +186,18 @@ CombineExtremeRows(const Image<float, 3> *              stack,
       {
         const CombinationPlan & plan = plans[c];
         const float *           first = in + plan.Index[0] * plane + row * columns;
-        for (SizeValueType x = 0; x < columns; ++x)
-        {
-          extremum[x] = first[x];
-          check[x] = first[x] - first[x];
-        }
+        StartExtremeRow(first, columns, extremum, check);
         for (size_t k = 1; k < plan.Index.size(); ++k)
         {
-          const float * __restrict layer = in + plan.Index[k] * plane + row * columns;
-          if (largest)
-          {
-            for (SizeValueType x = 0; x < columns; ++x)
-            {
-              extremum[x] = extremum[x] < layer[x] ? layer[x] : extremum[x];
-              check[x] += layer[x] - layer[x];
-            }
-          }
-          else
-          {
-            for (SizeValueType x = 0; x < columns; ++x)
-            {
-              extremum[x] = layer[x] < extremum[x] ? layer[x] : extremum[x];
-              check[x] += layer[x] - layer[x];
-            }
-          }
+          AddToExtremeRow(in + plan.Index[k] * plane + row * columns, columns, largest, extremum, check);
         }
         std::fill(core, core + columns, 0.0);
         for (const SizeValueType k : plan.Core)
         {
-          const float * __restrict layer = in + plan.Index[k] * plane + row * columns;
-          for (SizeValueType x = 0; x < columns; ++x)
-          {
-            core[x] += layer[x];
-          }
+          AddToCoreRow(in + plan.Index[k] * plane + row * columns, columns, core);
         }
         const double coreCount = plan.Core.empty() ? 1.0 : static_cast<double>(plan.Core.size());
-        float * __restrict target = out[c] + row * columns;
-        for (SizeValueType x = 0; x < columns; ++x)
-        {
-          target[x] = check[x] == 0.0f ? static_cast<float>(extremum[x] - core[x] / coreCount) : NaN;
-        }
+        FinishExtremeRow(extremum, check, core, coreCount, columns, out[c] + row * columns);
       }
     },
     nullptr);
