@@ -227,6 +227,13 @@ Tracer::Peaks(const std::vector<double> & p) const
     crossing.Width = width;
     crossing.Mass = std::accumulate(p.begin() + first, p.begin() + last + 1, 0.0) * m_Frame.Dr;
     crossing.Inner = crossing.Outer = crossing.Radius;
+    crossing.InnerHalf = crossing.OuterHalf = crossing.Radius;
+    if (count >= 2)
+    {
+      const long middle = first + count / 2;
+      crossing.InnerHalf = centroid(first, middle - 1, 0.5 * static_cast<double>(first + middle - 1));
+      crossing.OuterHalf = centroid(middle, last, 0.5 * static_cast<double>(middle + last));
+    }
     const double widths = width / m_Width, masses = crossing.Mass / m_Mass;
     if (m_WidthMeasured && (widths > SplitWidth || masses > SplitMass))
     {

@@ -195,6 +195,7 @@ Tracer::NearestCrossing(const std::vector<Crossing> & list,
                         double                        lastCarried,
                         double                        below,
                         double                        bump,
+                        double                        ahead,
                         double &                      sheet) const
 {
   const double voxel = m_Settings.Voxel;
@@ -231,9 +232,24 @@ Tracer::NearestCrossing(const std::vector<Crossing> & list,
       spacing = std::min(spacing, priorSpacing);
     }
   }
-  const double window = AcceptWindow * std::max(spacing, voxel);
-  const double apart = Apart();
-  sheet = list[best].SheetNear(target);
+  const double     window = AcceptWindow * std::max(spacing, voxel);
+  const double     apart = Apart();
+  const Crossing & crossing = list[best];
+  sheet = crossing.SheetNear(target);
+  if (m_WidthMeasured && !crossing.Band() &&
+      (crossing.Width > SharedWidth * m_Width || crossing.Mass > SharedMass * m_Mass))
+  {
+    // Heavier than one sheet, and the turn before or the next one lies in it too (not on
+    // this turn): two turns pressed together; this turn's sheet is the half on its side.
+    const auto holds = [&](double r) {
+      return std::isfinite(r) && std::abs(r - crossing.Radius) < 0.5 * crossing.Width && std::abs(r - target) > apart;
+    };
+    const bool before = holds(below), after = holds(ahead);
+    if (before != after)
+    {
+      sheet = (before ? below : ahead) < target ? crossing.OuterHalf : crossing.InnerHalf;
+    }
+  }
   const bool near = bestDistance < window && (guide != nullptr || std::abs(sheet - lastCarried) < window);
   const bool circling = (std::isfinite(below) && std::abs(sheet - below) < apart) ||
                         (std::isfinite(bump) && std::abs(sheet - bump) < apart);
@@ -401,10 +417,13 @@ Tracer::Follow(const SliceCrossings &    crossings,
       const double belowLast = turnBefore(dir * (last.M - start));
       lastCarried += std::isfinite(belowLast) ? below - belowLast : 0.0;
     }
+    // The next turn where the neighbouring slice predicts it.
+    const double ahead = guided && prior->Covers(m + dir * m_Frame.Rays) ? prior->At(m + dir * m_Frame.Rays) + offset
+                                                                         : std::numeric_limits<double>::quiet_NaN();
     // The crossing accepted near a prediction (NearestCrossing), and the radius of its sheet.
     double sheet = 0.0;
     auto   accept = [&](double target) {
-      return NearestCrossing(list, target, guided ? prior : nullptr, m, lastCarried, below, bump, sheet);
+      return NearestCrossing(list, target, guided ? prior : nullptr, m, lastCarried, below, bump, ahead, sheet);
     };
     size_t best = accept(predicted);
     if (best == list.size() && !guided && turnKnown && std::isfinite(below))

@@ -48,6 +48,10 @@ constexpr double MaterialLevel = 0.5;
 // never on its middle, which lies between two turns.
 constexpr double SplitWidth = 1.6;
 constexpr double SplitMass = 1.6;
+// A crossing narrower than that but this many typical sheets wide or heavy may hold two
+// turns pressed together: where a neighbouring turn lies in it too, each turn takes its half.
+constexpr double SharedWidth = 1.25;
+constexpr double SharedMass = 1.25;
 // The next crossing is accepted within this fraction of the local turn spacing.
 constexpr double AcceptWindow = 0.4;
 // A seed slice's minimal paths are kept only where they run through air (within the scan's
@@ -174,6 +178,10 @@ struct Crossing
   // innermost and outermost sheets; Radius for one sheet.
   double Inner;
   double Outer;
+  // The centroids of the crossing's inner and outer halves: the sheets of two turns pressed
+  // together too closely to show as a band (Radius for a crossing too narrow to halve).
+  double InnerHalf;
+  double OuterHalf;
 
   bool
   Band() const
@@ -321,7 +329,8 @@ public:
   // covering step m, of the last accepted radius carried to this step) and not on the turn
   // one revolution before (`below`, or its `bump` at a touch): the trace would circle.
   // `sheet`: the radius of its sheet nearest the target (a band of touching turns: its inner
-  // or outer sheet).
+  // or outer sheet; a crossing heavier than one sheet that also holds the turn before or
+  // the next turn (`ahead`, predicted; NaN where unknown): its half on this turn's side).
   size_t
   NearestCrossing(const std::vector<Crossing> & list,
                   double                        target,
@@ -330,6 +339,7 @@ public:
                   double                        lastCarried,
                   double                        below,
                   double                        bump,
+                  double                        ahead,
                   double &                      sheet) const;
 
   // Updates what Follow() has learnt with a confirmed step at radius r: the distances to the
