@@ -71,6 +71,10 @@ public:
   }
 
 private:
+  /** The trilinear blend of the cell at p (its corners `step` apart along each axis) at
+   * fractions f. */
+  static float
+  Interpolate(const typename TImage::PixelType * p, const float f[3], const SizeValueType step[3]);
   float
   Trilinear(const double index[3]) const;
   /** Trilinear() at an index inside the cells (each coordinate in [lower, upper) of a volume

@@ -82,6 +82,23 @@ LayeredVolumeSampler<TImage>::ConnectInterpolator(InterpolatorType * interpolato
 
 template <typename TImage>
 inline float
+LayeredVolumeSampler<TImage>::Interpolate(const typename TImage::PixelType * p,
+                                          const float                        f[3],
+                                          const SizeValueType                step[3])
+{
+  // Single precision: the voxels are floats, and the weights need no more.
+  const auto  at = [p](SizeValueType o) { return static_cast<float>(p[o]); };
+  const float c00 = at(0) + f[0] * (at(step[0]) - at(0));
+  const float c10 = at(step[1]) + f[0] * (at(step[1] + step[0]) - at(step[1]));
+  const float c01 = at(step[2]) + f[0] * (at(step[2] + step[0]) - at(step[2]));
+  const float c11 = at(step[2] + step[1]) + f[0] * (at(step[2] + step[1] + step[0]) - at(step[2] + step[1]));
+  const float c0 = c00 + f[1] * (c10 - c00);
+  const float c1 = c01 + f[1] * (c11 - c01);
+  return c0 + f[2] * (c1 - c0);
+}
+
+template <typename TImage>
+inline float
 LayeredVolumeSampler<TImage>::Trilinear(const double index[3]) const
 {
   SizeValueType offset = 0;
@@ -96,16 +113,7 @@ LayeredVolumeSampler<TImage>::Trilinear(const double index[3]) const
     step[i] = m_Last[i] > 0 ? m_Stride[i] : 0;
     offset += base * m_Stride[i];
   }
-  // Single precision: the voxels are floats, and the weights need no more.
-  const auto * p = m_Buffer + offset;
-  const auto   at = [p](SizeValueType o) { return static_cast<float>(p[o]); };
-  const float  c00 = at(0) + f[0] * (at(step[0]) - at(0));
-  const float  c10 = at(step[1]) + f[0] * (at(step[1] + step[0]) - at(step[1]));
-  const float  c01 = at(step[2]) + f[0] * (at(step[2] + step[0]) - at(step[2]));
-  const float  c11 = at(step[2] + step[1]) + f[0] * (at(step[2] + step[1] + step[0]) - at(step[2] + step[1]));
-  const float  c0 = c00 + f[1] * (c10 - c00);
-  const float  c1 = c01 + f[1] * (c11 - c01);
-  return c0 + f[2] * (c1 - c0);
+  return Interpolate(m_Buffer + offset, f, step);
 }
 
 template <typename TImage>
@@ -121,16 +129,7 @@ LayeredVolumeSampler<TImage>::TrilinearInside(const double index[3]) const
     f[i] = static_cast<float>(c - base);
     offset += base * m_Stride[i];
   }
-  const auto *        p = m_Buffer + offset;
-  const auto          at = [p](SizeValueType o) { return static_cast<float>(p[o]); };
-  const SizeValueType s0 = m_Stride[0], s1 = m_Stride[1], s2 = m_Stride[2];
-  const float         c00 = at(0) + f[0] * (at(s0) - at(0));
-  const float         c10 = at(s1) + f[0] * (at(s1 + s0) - at(s1));
-  const float         c01 = at(s2) + f[0] * (at(s2 + s0) - at(s2));
-  const float         c11 = at(s2 + s1) + f[0] * (at(s2 + s1 + s0) - at(s2 + s1));
-  const float         c0 = c00 + f[1] * (c10 - c00);
-  const float         c1 = c01 + f[1] * (c11 - c01);
-  return c0 + f[2] * (c1 - c0);
+  return Interpolate(m_Buffer + offset, f, m_Stride);
 }
 
 template <typename TImage>
