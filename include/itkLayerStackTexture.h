@@ -56,6 +56,8 @@ namespace itk {
  *   Smooth(6 strokeSigma): letters' strokes are kept, the sheet's slow changes of
  *   brightness (a slab drifting towards a face, the sheet's edges) and pixel noise are not,
  *   so among focal slabs of a noisy scan the one that shows the writing scores highest.
+ *   With `leaveOut` (a texture of the same size), the pixels where it is not finite are
+ *   left out of the score (not of the filtering): a region where another sheet touches.
  * - Quantiles(): the values of the finite pixels at the given ranks q (0..1; the value
  *   of rank round(q (n - 1)) of the n finite pixels sorted), exactly, by sampled selection
  *   in a few passes without copying the texture (a display window, a noise level). An
@@ -116,7 +118,7 @@ public:
   InkContrast(const TextureType * texture);
 
   static double
-  StrokeContrast(const TextureType * texture, double strokeSigma);
+  StrokeContrast(const TextureType * texture, double strokeSigma, const TextureType * leaveOut = nullptr);
 
   static double
   NoiseSpread(const TextureType * texture);

@@ -74,6 +74,9 @@ struct ReadableTextureSelection
   size_t                                Chosen{ 0 };
   /** Noisy scan with automatic side: the candidates are focal slabs scored by stroke contrast. */
   bool   FocalSlabs{ false };
+  /** Focal slabs: the pixels left out of their scores, where another sheet's material
+   * lies in the stack's outermost layers (a sheet touching this one) or near it. */
+  size_t PixelsLeftOut{ 0 };
   double MedianRadius{ 0.0 };
   double SmoothSigma{ 0.0 };
   double CoreWidth{ 0.0 };

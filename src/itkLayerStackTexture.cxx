@@ -354,10 +354,15 @@ LayerStackTexture::LayerWindow(const LayerStackType * stack, unsigned int first,
 }
 
 double
-LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigma)
+LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigma, const TextureType * leaveOut)
 {
   CheckTexture(texture, "StrokeContrast");
   detail::CheckLayerParameter(strokeSigma, false, "StrokeContrast", "the stroke sigma");
+  if (leaveOut != nullptr && leaveOut->GetBufferedRegion().GetSize() != texture->GetBufferedRegion().GetSize())
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::StrokeContrast: the pixels to leave out are not the texture's size");
+  }
+  const float * keep = leaveOut != nullptr ? leaveOut->GetBufferPointer() : nullptr;
   const auto    fine = Smooth(texture, strokeSigma);
   const auto    coarse = Smooth(texture, 6.0 * strokeSigma);
   auto          band = NewTexture(texture);
@@ -367,7 +372,7 @@ LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigm
   const size_t  n = texture->GetBufferedRegion().GetNumberOfPixels();
   for (size_t i = 0; i < n; ++i)
   {
-    b[i] = std::isfinite(f[i]) && std::isfinite(c[i]) ? f[i] - c[i] : NaN;
+    b[i] = std::isfinite(f[i]) && std::isfinite(c[i]) && (keep == nullptr || std::isfinite(keep[i])) ? f[i] - c[i] : NaN;
   }
   return InkContrast(band);
 }

@@ -23,6 +23,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace itk {
@@ -34,10 +35,71 @@ using TextureType = LayerStackTexture::TextureType;
 constexpr double RestoreRangeFactor = 2.0;
 constexpr double RestoreRegularization = 0.1;
 
+// A sample of an outermost layer of the stack (beyond the sheet's face and its blur) is
+// another sheet's material when, smoothed over a voxel, it lies above the midpoint between
+// that layer's median and the middle layer's (the sheet's) median. Pixels within this
+// many voxels of one are left out of the focal slabs' scores: the band-pass of the score
+// reaches three voxels (six stroke sigmas of half a voxel).
+constexpr double ForeignReach = 3.0;
+// More than this share of the pixels touched is not a local contact (turns packed tighter
+// than the stack reaches): nothing is left out.
+constexpr double ForeignShareLimit = 0.25;
+
 [[noreturn]] void
 Fail(const std::string & message)
 {
   itkGenericExceptionMacro(<< message);
+}
+
+double
+Median(const TextureType * texture)
+{
+  const std::vector<double> q = LayerStackTexture::Quantiles(texture, { 0.5 });
+  return q.empty() ? std::numeric_limits<double>::quiet_NaN() : q.front();
+}
+
+// NaN where another sheet's material lies in the stack's outermost layers, or within
+// ForeignReach voxels of it; 1 elsewhere. Null where no pixel or too many are touched.
+TextureType::Pointer
+OwnSheetPixels(const Image<float, 3> * stack, unsigned int layers, double voxel)
+{
+  if (layers < 3)
+  {
+    return nullptr;
+  }
+  const double sheetLevel = Median(LayerStackTexture::LayerWindow(stack, layers / 2, 1));
+  auto         touched = LayerStackTexture::LayerWindow(stack, 0, 1);
+  float *      mark = touched->GetBufferPointer();
+  const size_t n = touched->GetBufferedRegion().GetNumberOfPixels();
+  std::fill_n(mark, n, 0.0f);
+  size_t count = 0;
+  for (const unsigned int k : { 0u, layers - 1 })
+  {
+    const auto   outer = LayerStackTexture::Smooth(LayerStackTexture::LayerWindow(stack, k, 1), voxel);
+    const double level = 0.5 * (Median(outer) + sheetLevel);
+    const float * v = outer->GetBufferPointer();
+    for (size_t i = 0; i < n; ++i)
+    {
+      if (std::isfinite(v[i]) && v[i] > level && mark[i] == 0.0f)
+      {
+        mark[i] = 1.0f;
+        ++count;
+      }
+    }
+  }
+  if (!std::isfinite(sheetLevel) || count == 0 || static_cast<double>(count) > ForeignShareLimit * static_cast<double>(n))
+  {
+    return nullptr;
+  }
+  // Within the reach of a touched pixel: the box of that half-width around it (a separable
+  // running maximum would do the same; a smoothing's support is simpler and as fast here).
+  auto         near = LayerStackTexture::Smooth(touched, ForeignReach * voxel / 3.0);
+  const float *  reach = near->GetBufferPointer();
+  for (size_t i = 0; i < n; ++i)
+  {
+    mark[i] = reach[i] > 1e-3f ? std::numeric_limits<float>::quiet_NaN() : 1.0f;
+  }
+  return touched;
 }
 } // namespace
 
@@ -114,13 +176,21 @@ SelectReadableTexture(const Image<float, 3> * stack, const ReadableTextureSettin
   if (selection.FocalSlabs)
   {
     const double strokeSigma = 0.5 * settings.Voxel;
+    const auto   own = OwnSheetPixels(stack, layers, settings.Voxel);
+    selection.PixelsLeftOut = 0;
+    if (own != nullptr)
+    {
+      const float * o = own->GetBufferPointer();
+      selection.PixelsLeftOut = static_cast<size_t>(
+        std::count_if(o, o + own->GetBufferedRegion().GetNumberOfPixels(), [](float v) { return !std::isfinite(v); }));
+    }
     for (const unsigned int count : { 3u, 5u })
     {
       for (unsigned int first = 0; first + count <= layers; ++first)
       {
         textures.push_back(denoise(LayerStackTexture::LayerWindow(stack, first, count)));
         selection.Candidates.push_back(
-          { SideEnum::Both, false, LayerStackTexture::StrokeContrast(textures.back(), strokeSigma), first, count });
+          { SideEnum::Both, false, LayerStackTexture::StrokeContrast(textures.back(), strokeSigma, own), first, count });
       }
     }
   }

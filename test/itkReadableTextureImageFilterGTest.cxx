@@ -25,7 +25,9 @@
 #include "gtest/gtest.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <random>
 
 namespace {
 using FilterType = itk::ReadableTextureImageFilter<vu::VolumeType>;
@@ -179,6 +181,95 @@ TEST(ReadableTextureImageFilter, FocalSlabsOnANoisyScan)
   std::cout << "focal slab layers " << selection.ChosenCandidate().First << " + " << selection.ChosenCandidate().Count
             << ", depth " << selection.Depth << " mm, NCC " << ncc << std::endl;
   EXPECT_GE(ncc, 0.85);
+}
+
+// Where another sheet touches this one, its material fills the stack's outermost layers on
+// that side over a patch: a bright disc with sharp edges, which the stroke measure would
+// take for writing. Those pixels are left out of the focal slabs' scores, and the slab
+// holding the strokes is chosen. Stroke positions, the disc, the noise and the ink's side
+// are drawn at run time.
+TEST(ReadableTextureImageFilter, AnotherSheetTouchingIsNotTakenForWriting)
+{
+  const unsigned seed = std::random_device{}();
+  std::mt19937   random(seed);
+  std::cout << "seed " << seed << std::endl;
+  constexpr unsigned int Layers = 9;
+  constexpr long         Columns = 160, Rows = 100;
+  const bool             inkPositive = std::bernoulli_distribution(0.5)(random);
+  // Sheet profile across the layers (0.5-voxel layer spacing, a 2.2-voxel sheet blurred).
+  std::array<float, Layers> profile{};
+  for (unsigned int k = 0; k < Layers; ++k)
+  {
+    const double d = 0.5 * (static_cast<double>(k) - 4.0);
+    profile[k] = static_cast<float>(0.5 * (std::erf((1.1 - d) / 0.9) + std::erf((1.1 + d) / 0.9)));
+  }
+  // Ink strokes: vertical and horizontal bars two pixels wide, in letter-sized boxes.
+  std::vector<uint8_t> ink(Columns * Rows, 0);
+  std::uniform_int_distribution<long> boxX(10, Columns - 26), boxY(15, Rows - 35);
+  for (int letter = 0; letter < 10; ++letter)
+  {
+    const long x0 = boxX(random), y0 = boxY(random);
+    for (long y = y0; y < y0 + 20; ++y)
+    {
+      for (long x = x0; x < x0 + 14; ++x)
+      {
+        const bool bar = (x - x0 < 2) || (y - y0 < 2) || (letter % 2 == 0 && y - y0 >= 9 && y - y0 < 11);
+        ink[y * Columns + x] |= bar ? 1 : 0;
+      }
+    }
+  }
+  // The other sheet's patch: a disc in the three outermost layers of the side away from the ink.
+  std::uniform_real_distribution<double> where(0.25, 0.75), radius(8.0, 14.0);
+  const double cx = where(random) * Columns, cy = where(random) * Rows, r = radius(random);
+  auto stack = itk::Image<float, 3>::New();
+  itk::Image<float, 3>::SizeType size{ { static_cast<itk::SizeValueType>(Columns), static_cast<itk::SizeValueType>(Rows), Layers } };
+  stack->SetRegions(size);
+  const double spacing[3] = { 0.25 * Voxel, 0.25 * Voxel, 0.25 * Voxel };
+  stack->SetSpacing(spacing);
+  stack->Allocate();
+  auto clean = itk::Image<float, 3>::New();
+  clean->CopyInformation(stack);
+  clean->SetRegions(size);
+  clean->Allocate();
+  std::normal_distribution<float> noise(0.0f, 0.12f);
+  for (unsigned int k = 0; k < Layers; ++k)
+  {
+    const unsigned int fromInkFace = inkPositive ? Layers - 1 - k : k;
+    const bool         inkLayer = fromInkFace >= 2 && fromInkFace <= 3;
+    const bool         patchLayer = (inkPositive ? k : Layers - 1 - k) <= 2;
+    for (long y = 0; y < Rows; ++y)
+    {
+      for (long x = 0; x < Columns; ++x)
+      {
+        const size_t i = (static_cast<size_t>(k) * Rows + y) * Columns + x;
+        float        v = profile[k] + (inkLayer && ink[y * Columns + x] ? 0.6f : 0.0f) + noise(random);
+        clean->GetBufferPointer()[i] = v;
+        if (patchLayer && std::hypot(x - cx, y - cy) < r)
+        {
+          v = std::max(v, 1.0f + noise(random));
+        }
+        stack->GetBufferPointer()[i] = v;
+      }
+    }
+  }
+  itk::ReadableTextureSettings settings;
+  settings.NumberOfLayers = Layers;
+  settings.LayerSpacing = 0.5 * Voxel;
+  settings.Voxel = Voxel;
+  settings.DenoisingSigma = 0.7;
+  const auto touched = itk::SelectReadableTexture(stack, settings);
+  const auto alone = itk::SelectReadableTexture(clean, settings);
+  ASSERT_TRUE(touched.FocalSlabs);
+  EXPECT_GT(touched.PixelsLeftOut, 0u);
+  EXPECT_LT(touched.PixelsLeftOut, static_cast<size_t>(0.25 * Columns * Rows));
+  EXPECT_EQ(alone.PixelsLeftOut, 0u);
+  // The chosen slab lies on the ink's side of the middle, as without the other sheet.
+  const auto & chosen = touched.ChosenCandidate();
+  std::cout << "ink on the " << (inkPositive ? "positive" : "negative") << " side; disc r " << r << "; chosen layers "
+            << chosen.First << " + " << chosen.Count << " (alone: " << alone.ChosenCandidate().First << " + "
+            << alone.ChosenCandidate().Count << "), " << touched.PixelsLeftOut << " pixels left out" << std::endl;
+  EXPECT_EQ(touched.Depth > 0.0, inkPositive);
+  EXPECT_EQ(alone.Depth > 0.0, inkPositive);
 }
 
 // A side given: one candidate per core choice asked for; restoration replaces the Gaussian.

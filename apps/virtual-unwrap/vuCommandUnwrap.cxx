@@ -163,7 +163,8 @@ TextureParametersJson(const itk::ReadableTextureImageFilter<VolumeType, TextureT
            { "filter_requested", options.Filter },
            { "focal_slab",
              chosen.Count > 0 ? nlohmann::json{ { "layers", { chosen.First, chosen.First + chosen.Count - 1 } },
-                                                { "depth_mm", selection.Depth } }
+                                                { "depth_mm", selection.Depth },
+                                                { "pixels_left_out_of_scores", selection.PixelsLeftOut } }
                               : nlohmann::json(false) },
            { "subtract_core", chosen.SubtractCore },
            { "subtract_core_requested", options.SubtractCore },
