@@ -30,9 +30,11 @@ namespace itk {
  * \brief Legibility of a flat image of text: what tesseract OCR reads in it and the
  * character error rate (CER) against the known text.
  *
- * Compute() windows the image between the 0.5th and 99.5th percentiles of its finite
- * pixels (non-finite pixels, e.g. NaN off an unwrapped sheet, take the median of the finite
- * ones, the background where ink covers a minority), inverts it when
+ * Compute() windows the image as texture.png shows it (LayerStackTexture::DisplayWindow()
+ * of its finite pixels: the background's median and speckle below the ink's side of the
+ * window, the 0.5th or 99.5th percentile at the other; non-finite pixels, e.g. NaN off an
+ * unwrapped sheet, take the median of the finite ones, the background where ink covers a
+ * minority), inverts it when
  * InkIsBright (CT ink is denser, hence brighter, than the sheet) so that the text is dark
  * on white, enlarges it by UpscaleFactor (linear interpolation; less when the enlarged
  * image would exceed tesseract's largest side, 32767 pixels with the border: a long roll's

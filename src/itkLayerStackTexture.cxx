@@ -161,6 +161,10 @@ TextureRanks(const TextureType * texture)
   return detail::FiniteRanks(texture->GetBufferPointer(), texture->GetBufferedRegion().GetNumberOfPixels());
 }
 
+// The display's black point lies this many noise spreads above the background's median
+// (DisplayWindow).
+constexpr double BackgroundClip = 0.5;
+
 // 1.4826 x the median absolute deviation of the ranked values from their `median`.
 double
 Spread(const detail::FiniteRanks & ranks, double median)
@@ -375,6 +379,27 @@ LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigm
     b[i] = std::isfinite(f[i]) && std::isfinite(c[i]) && (keep == nullptr || std::isfinite(keep[i])) ? f[i] - c[i] : NaN;
   }
   return InkContrast(band);
+}
+
+std::vector<double>
+LayerStackTexture::DisplayWindow(const TextureType * texture, bool inkIsBright)
+{
+  CheckTexture(texture, "DisplayWindow");
+  const detail::FiniteRanks ranks = TextureRanks(texture);
+  if (ranks.GetCount() == 0)
+  {
+    return {};
+  }
+  const std::vector<float> q = ranks.Quantiles({ 0.005, 0.5, 0.995 });
+  const double             low = q[0], median = q[1], high = q[2];
+  const double             clip = BackgroundClip * Spread(ranks, median);
+  const double             black = inkIsBright ? std::max(low, median + clip) : low;
+  const double             white = inkIsBright ? high : std::min(high, median - clip);
+  if (white > black)
+  {
+    return { black, white };
+  }
+  return { low, std::max(high, low + 1e-6) };
 }
 
 double

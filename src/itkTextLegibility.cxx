@@ -16,6 +16,7 @@
  *
  *=========================================================================*/
 #include "itkTextLegibility.h"
+#include "itkLayerStackTexture.h"
 
 #include "itkConstantPadImageFilter.h"
 #include "itkIdentityTransform.h"
@@ -188,13 +189,13 @@ TextLegibility::Compute()
   {
     itkExceptionMacro(<< "the image has no finite pixel");
   }
-  const size_t lowRank = values.size() / 200, highRank = values.size() - 1 - values.size() / 200;
   std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
   const float background = values[values.size() / 2];
-  std::nth_element(values.begin(), values.begin() + lowRank, values.end());
-  const float low = values[lowRank];
-  std::nth_element(values.begin(), values.begin() + highRank, values.end());
-  const float high = std::max(values[highRank], low + 1e-6f);
+  // The window of the image a person looks at (texture.png): the background dark, its
+  // speckle below the black point, which tesseract would otherwise read as letters.
+  const std::vector<double> shown = LayerStackTexture::DisplayWindow(m_Image, m_InkIsBright);
+  const auto                low = static_cast<float>(shown[0]);
+  const float               high = std::max(static_cast<float>(shown[1]), low + 1e-6f);
   auto        finite = ImageType::New();
   finite->CopyInformation(m_Image);
   finite->SetRegions(region);

@@ -48,7 +48,7 @@ itk::Image<unsigned char, 2>::Pointer
 EightBit(const itk::Image<float, 2> * texture)
 {
   using TextureType = itk::Image<float, 2>;
-  const std::vector<double> window = itk::LayerStackTexture::Quantiles(texture, { 0.005, 0.995 });
+  const std::vector<double> window = itk::LayerStackTexture::DisplayWindow(texture);
   if (window.empty())
   {
     throw UsageError("the texture has no pixel on the sheet");
