@@ -59,7 +59,8 @@ SplitTouchingSheets(const Image<float, 3> *   values,
                     SizeValueType             minimumCoreVoxels);
 /** A copy of `volume` in which the voxels of the other sheets (labels of `sheets` other
  * than 0 and `sheet`), and the unlabelled voxels next to them (their blurred faces), hold
- * the background: the median of the unlabelled voxels. A sheet's texture sampled from it
+ * the background: values of the unlabelled voxels away from every sheet (air as scanned,
+ * noise and all), drawn in a fixed order. A sheet's texture sampled from it
  * does not show the sheets that touch it. `sheets` covers the volume's region (as
  * SheetMidSurfaceMeshFilter::GetSheetLabelImage does). */
 VirtualUnwrapping_EXPORT Image<float, 3>::Pointer

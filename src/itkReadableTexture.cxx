@@ -35,14 +35,17 @@ using TextureType = LayerStackTexture::TextureType;
 constexpr double RestoreRangeFactor = 2.0;
 constexpr double RestoreRegularization = 0.1;
 
-// A sample of an outermost layer of the stack (beyond the sheet's face and its blur) is
-// another sheet's material when, smoothed over a voxel, it lies above the midpoint between
-// that layer's median and the middle layer's (the sheet's) median. Pixels within this
-// many voxels of one are left out of the focal slabs' scores: the band-pass of the score
-// reaches three voxels (six stroke sigmas of half a voxel).
+// Where the sheet is not on the mid-surface the focal slabs cannot show its writing: a
+// bulge the mesh does not follow leaves air at the middle layer, another sheet pressed
+// against this one puts material in the outermost layers (beyond the face and its blur).
+// Pixels where the middle layer, smoothed over a voxel, lies below the midpoint between
+// the air (the darkest layer's median) and the sheet (the middle layer's median), or an
+// outermost layer above it, are left out of the focal slabs' scores, with the pixels
+// within ForeignReach voxels of them (the band-pass of the score reaches three voxels,
+// six stroke sigmas of half a voxel).
 constexpr double ForeignReach = 3.0;
-// More than this share of the pixels touched is not a local contact (turns packed tighter
-// than the stack reaches): nothing is left out.
+// More than this share of the pixels off the sheet is not a local defect (turns packed
+// tighter than the stack reaches, a mesh off the sheet everywhere): nothing is left out.
 constexpr double ForeignShareLimit = 0.25;
 
 [[noreturn]] void
@@ -58,8 +61,8 @@ Median(const TextureType * texture)
   return q.empty() ? std::numeric_limits<double>::quiet_NaN() : q.front();
 }
 
-// NaN where another sheet's material lies in the stack's outermost layers, or within
-// ForeignReach voxels of it; 1 elsewhere. Null where no pixel or too many are touched.
+// NaN where the sheet is off the mid-surface, or within ForeignReach voxels of such a
+// pixel; 1 elsewhere. Null where no pixel or too many are off.
 TextureType::Pointer
 OwnSheetPixels(const Image<float, 3> * stack, unsigned int layers, double voxel)
 {
@@ -67,39 +70,47 @@ OwnSheetPixels(const Image<float, 3> * stack, unsigned int layers, double voxel)
   {
     return nullptr;
   }
-  const double sheetLevel = Median(LayerStackTexture::LayerWindow(stack, layers / 2, 1));
-  auto         touched = LayerStackTexture::LayerWindow(stack, 0, 1);
-  float *      mark = touched->GetBufferPointer();
-  const size_t n = touched->GetBufferedRegion().GetNumberOfPixels();
-  std::fill_n(mark, n, 0.0f);
-  size_t count = 0;
-  for (const unsigned int k : { 0u, layers - 1 })
+  const auto layer = [&](unsigned int k) {
+    return LayerStackTexture::Smooth(LayerStackTexture::LayerWindow(stack, k, 1), voxel);
+  };
+  const auto inner = layer(layers / 2), first = layer(0), last = layer(layers - 1);
+  double     air = std::numeric_limits<double>::infinity();
+  for (unsigned int k = 0; k < layers; ++k)
   {
-    const auto   outer = LayerStackTexture::Smooth(LayerStackTexture::LayerWindow(stack, k, 1), voxel);
-    const double level = 0.5 * (Median(outer) + sheetLevel);
-    const float * v = outer->GetBufferPointer();
-    for (size_t i = 0; i < n; ++i)
-    {
-      if (std::isfinite(v[i]) && v[i] > level && mark[i] == 0.0f)
-      {
-        mark[i] = 1.0f;
-        ++count;
-      }
-    }
+    const double level = Median(LayerStackTexture::LayerWindow(stack, k, 1));
+    air = std::isfinite(level) ? std::min(air, level) : air;
   }
-  if (!std::isfinite(sheetLevel) || count == 0 || static_cast<double>(count) > ForeignShareLimit * static_cast<double>(n))
+  const double sheet = Median(inner), level = 0.5 * (air + sheet);
+  if (!std::isfinite(level) || !(sheet > air))
   {
     return nullptr;
   }
-  // Within the reach of a touched pixel: the box of that half-width around it (a separable
-  // running maximum would do the same; a smoothing's support is simpler and as fast here).
-  auto         near = LayerStackTexture::Smooth(touched, ForeignReach * voxel / 3.0);
-  const float *  reach = near->GetBufferPointer();
+  auto          off = LayerStackTexture::LayerWindow(stack, 0, 1);
+  float *       mark = off->GetBufferPointer();
+  const size_t  n = off->GetBufferedRegion().GetNumberOfPixels();
+  const float * middle = inner->GetBufferPointer();
+  const float * outer[2] = { first->GetBufferPointer(), last->GetBufferPointer() };
+  size_t        count = 0;
+  for (size_t i = 0; i < n; ++i)
+  {
+    const bool displaced =
+      (std::isfinite(middle[i]) && middle[i] < level) || (std::isfinite(outer[0][i]) && outer[0][i] > level) ||
+      (std::isfinite(outer[1][i]) && outer[1][i] > level);
+    mark[i] = displaced ? 1.0f : 0.0f;
+    count += displaced ? 1 : 0;
+  }
+  if (count == 0 || static_cast<double>(count) > ForeignShareLimit * static_cast<double>(n))
+  {
+    return nullptr;
+  }
+  // Within the reach of a displaced pixel: the support of a Gaussian of a third of it.
+  const auto    near = LayerStackTexture::Smooth(off, ForeignReach * voxel / 3.0);
+  const float * reach = near->GetBufferPointer();
   for (size_t i = 0; i < n; ++i)
   {
     mark[i] = reach[i] > 1e-3f ? std::numeric_limits<float>::quiet_NaN() : 1.0f;
   }
-  return touched;
+  return off;
 }
 } // namespace
 

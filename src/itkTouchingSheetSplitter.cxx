@@ -26,6 +26,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <random>
 #include <vector>
 
 namespace itk {
@@ -306,36 +307,52 @@ BlankOtherSheets(const Image<float, 3> * volume, const Image<uint16_t, 3> * shee
   const SizeValueType n = volume->GetBufferedRegion().GetNumberOfPixels();
   const float *       in = volume->GetBufferPointer();
   const uint16_t *    label = sheets->GetBufferPointer();
-  // The background: the median of the unlabelled voxels (a sample of them).
+  const SizeValueType strides[3] = { 1, size[0], size[0] * size[1] };
+  // The background: values of unlabelled voxels none of whose face-neighbours is labelled
+  // (air, away from the sheets' blurred faces), a sample of them, drawn in a fixed order
+  // so that a blanked region has the scan's own noise. A constant would be a patch without
+  // noise, whose zero spread a texture's contrast measures take for signal.
   std::vector<float>  air;
   const SizeValueType stride = std::max<SizeValueType>(1, n / 200000);
+  auto                awayFromSheets = [&](SizeValueType v) {
+    SizeValueType rest = v;
+    for (int d = 2; d >= 0; --d)
+    {
+      const SizeValueType at = rest / strides[d];
+      rest %= strides[d];
+      if ((at > 0 && label[v - strides[d]] != 0) || (at + 1 < size[d] && label[v + strides[d]] != 0))
+      {
+        return false;
+      }
+    }
+    return true;
+  };
   for (SizeValueType v = 0; v < n; v += stride)
   {
-    if (label[v] == 0 && std::isfinite(in[v]))
+    if (label[v] == 0 && std::isfinite(in[v]) && awayFromSheets(v))
     {
       air.push_back(in[v]);
     }
   }
-  float background = 0.0f;
-  if (!air.empty())
+  if (air.empty())
   {
-    std::nth_element(air.begin(), air.begin() + air.size() / 2, air.end());
-    background = air[air.size() / 2];
+    air.push_back(0.0f);
   }
+  std::minstd_rand                      draw(20040601);
+  std::uniform_int_distribution<size_t> pick(0, air.size() - 1);
   auto out = Image<float, 3>::New();
   out->CopyInformation(volume);
   out->SetRegions(volume->GetBufferedRegion());
   out->Allocate();
   float * o = out->GetBufferPointer();
   std::copy_n(in, n, o);
-  const SizeValueType strides[3] = { 1, size[0], size[0] * size[1] };
   for (SizeValueType v = 0; v < n; ++v)
   {
     if (label[v] == 0 || label[v] == sheet)
     {
       continue;
     }
-    o[v] = background;
+    o[v] = air[pick(draw)];
     // Its unlabelled face-neighbours.
     SizeValueType rest = v;
     for (int d = 2; d >= 0; --d)
@@ -344,11 +361,11 @@ BlankOtherSheets(const Image<float, 3> * volume, const Image<uint16_t, 3> * shee
       rest %= strides[d];
       if (at > 0 && label[v - strides[d]] == 0)
       {
-        o[v - strides[d]] = background;
+        o[v - strides[d]] = air[pick(draw)];
       }
       if (at + 1 < size[d] && label[v + strides[d]] == 0)
       {
-        o[v + strides[d]] = background;
+        o[v + strides[d]] = air[pick(draw)];
       }
     }
   }
