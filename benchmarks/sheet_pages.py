@@ -33,6 +33,7 @@ legible with CER <= 5 %.
     sheet_pages.py generate --kind book --seed N --out DIR [--param key=value ...]
     sheet_pages.py run --scenes N --seed S --out DIR [--kinds pair,book,fragments]
                        [--jobs 1] [--tool build/bin/virtual-unwrap] [--csv FILE] [--keep failures|all]
+                       [--param key=value ...]
         One row per true sheet in the CSV; a summary per kind (markdown) on stdout.
     sheet_pages.py summary --csv FILE
 """
@@ -437,6 +438,7 @@ def main():
     r.add_argument("--tool", default="build/bin/virtual-unwrap")
     r.add_argument("--csv", default=None)
     r.add_argument("--keep", choices=("failures", "all", "none"), default="failures")
+    r.add_argument("--param", action="append", default=[], help="key=value overriding a drawn parameter of every scene")
     c = sub.add_parser("check", help="one scene through the tool; exit 1 unless every sheet meets --require")
     c.add_argument("--kind", choices=KINDS, required=True)
     c.add_argument("--seed", type=int, default=None, help="default: drawn now (printed)")
@@ -448,13 +450,20 @@ def main():
     s = sub.add_parser("summary")
     s.add_argument("--csv", required=True)
     args = parser.parse_args()
-    if args.command in ("generate", "check"):
-        if args.seed is None:
-            args.seed = int(np.random.default_rng().integers(1, 2 ** 31 - 1))
+    def parse_overrides(kind, seed):
         overrides = {}
         for item in args.param:
             key, value = item.split("=", 1)
-            overrides[key] = type(draw_scene(args.kind, args.seed)[0][key])(value)
+            drawn = draw_scene(kind, seed)[0]
+            if key not in drawn:
+                raise SystemExit(f"no parameter {key!r}; the parameters: {', '.join(sorted(drawn))}")
+            overrides[key] = type(drawn[key])(value)
+        return overrides
+
+    if args.command in ("generate", "check"):
+        if args.seed is None:
+            args.seed = int(np.random.default_rng().integers(1, 2 ** 31 - 1))
+        overrides = parse_overrides(args.kind, args.seed)
         if args.command == "generate":
             truth = generate(args.kind, args.seed, args.out, overrides)
             print(json.dumps(truth["parameters"], indent=1))
@@ -478,7 +487,8 @@ def main():
     os.makedirs(args.out, exist_ok=True)
     rows = []
     with concurrent.futures.ProcessPoolExecutor(max_workers=args.jobs) as pool:
-        futures = [pool.submit(process, kind, seed, args.out, args.tool, args.keep) for kind, seed in tasks]
+        futures = [pool.submit(process, kind, seed, args.out, args.tool, args.keep,
+                               overrides=parse_overrides(kind, seed)) for kind, seed in tasks]
         for future in concurrent.futures.as_completed(futures):
             for row in future.result():
                 rows.append(row)
