@@ -212,16 +212,21 @@ StraightenRows(SheetMesh & flat)
   {
     return 0.0;
   }
-  // The frame may turn by at most a tenth of a radian over half the strip's width: a sheet
-  // bent more than that in its plane is not a slightly bent strip, and is left as it is.
+  // Along most of its length the frame may turn by at most a tenth of a radian over half
+  // the strip's width: a sheet bent more than that in its plane (a ring) is not a slightly
+  // bent strip, and is left as it is. A short stretch turning faster (a jog where the trace
+  // of an inner turn curls, a few columns of a long strip) does not make it one.
+  std::vector<double> turns(columns - 1);
   for (size_t c = 1; c < columns; ++c)
   {
     const double turn = std::acos(std::clamp(direction[c].dot(direction[c - 1]), -1.0, 1.0));
     const double step = std::max(arc[c] - arc[c - 1], 1e-12);
-    if (turn / step * 0.5 * width > 0.1)
-    {
-      return 0.0;
-    }
+    turns[c - 1] = turn / step * 0.5 * width;
+  }
+  std::nth_element(turns.begin(), turns.begin() + turns.size() / 2, turns.end());
+  if (turns[turns.size() / 2] > 0.1)
+  {
+    return 0.0;
   }
   // The bend taken out: the followed line's largest distance from its chord.
   const Vec2 chord = (origin.back() - origin.front()).normalized();

@@ -61,7 +61,9 @@ ToPlane(const std::vector<double> & x,
  * wide are taken out, each column keeps its shape. Returns the bend taken out (the
  * followed line's largest distance from its chord, mesh units); 0 and the mesh unchanged
  * for a mesh without a grid, or one bent in its plane by more than a tenth of a radian
- * over half its width (not a slightly bent strip). */
+ * over half its width along most of its length (not a slightly bent strip: a ring; a
+ * short stretch that turns faster, such as a jog where an inner turn's trace curls, does
+ * not count). */
 double
 StraightenRows(SheetMesh & flat);
 

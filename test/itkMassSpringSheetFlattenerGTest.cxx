@@ -25,6 +25,7 @@
 #include <array>
 #include <cmath>
 #include <iostream>
+#include <random>
 #include <set>
 
 namespace {
@@ -186,6 +187,44 @@ TEST(MassSpringSheetFlattener, ALongStripBentInItsPlaneComesOutWithStraightRows)
   FlattenAndMeasure(flattener, ring, parameters, &flat);
   EXPECT_LT(flattener.GetReport().RowBend, 0.5);
   EXPECT_GT(MiddleRowBend(flat), 5.0);
+}
+
+// A strip bent into a gentle arc in its plane, as a tapered roll develops, with a short
+// jog near one end (where the trace of an inner turn curls): the jog turns the strip's
+// frame fast over a few columns, but the strip is a slightly bent one and its rows come
+// out straight (the arc's radius, the jog's place and size drawn at run time).
+TEST(MassSpringSheetFlattener, AGentleArcWithAShortJogIsStraightened)
+{
+  const unsigned seed = std::random_device{}();
+  std::mt19937   random(seed);
+  const double   radius = std::uniform_real_distribution<double>(350.0, 700.0)(random);
+  const int      jogAt = std::uniform_int_distribution<int>(10, 20)(random);
+  const double   jog = std::uniform_real_distribution<double>(2.5, 3.5)(random);
+  std::cout << "seed " << seed << ": arc radius " << radius << ", jog of " << jog << " at column " << jogAt
+            << std::endl;
+  constexpr int    Rows = 6, Columns = 151;
+  constexpr double Spacing = 2.0;
+  const itk::SheetMesh strip = vu::GridMesh(Rows, Columns, [&](int r, int c) {
+    // Columns along the arc; the first columns shifted across it, the shift fading over 3.
+    const double shift = jog * std::clamp((jogAt - c) / 3.0, 0.0, 1.0);
+    const double rho = radius + Spacing * (r - 0.5 * (Rows - 1)) + shift;
+    const double angle = Spacing * (c - 0.5 * (Columns - 1)) / radius;
+    return std::array<double, 3>{ rho * std::sin(angle), rho * std::cos(angle), 0.0 };
+  });
+  itk::MassSpringFlatteningParameters parameters;
+  itk::MassSpringSheetFlattener       flattener;
+  itk::SheetMesh                      flat;
+  parameters.StraightenRows = 0;
+  FlattenAndMeasure(flattener, strip, parameters, &flat);
+  const double arc = MiddleRowBend(flat);
+  parameters.StraightenRows = 1;
+  auto c = FlattenAndMeasure(flattener, strip, parameters, &flat);
+  std::cout << "bend " << arc << " -> " << MiddleRowBend(flat) << ", reported " << flattener.GetReport().RowBend
+            << std::endl;
+  EXPECT_GT(arc, 10.0);
+  EXPECT_LT(MiddleRowBend(flat), 0.2 * arc);
+  EXPECT_GT(flattener.GetReport().RowBend, 0.5 * arc);
+  EXPECT_EQ(c->GetNumberOfFlippedTriangles(), 0u);
 }
 
 // A 10-turn roll with a tight inner curl (2.5 mm radius, 0.75 mm pitch, 0.74 mm spacing):

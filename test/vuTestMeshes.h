@@ -132,24 +132,31 @@ SpiralRollMesh(double innerRadius, double pitch, double turns, double spacing, d
     flat);
 }
 
-/** An n x n grid mesh, point (row r, column c) at point(r, c), two triangles a cell. */
+/** A rows x columns grid mesh, point (row r, column c) at point(r, c), two triangles a cell. */
 inline itk::SheetMesh
-SquareGridMesh(int n, const std::function<std::array<double, 3>(int, int)> & point)
+GridMesh(int rows, int columns, const std::function<std::array<double, 3>(int, int)> & point)
 {
   itk::SheetMesh mesh;
-  mesh.GridRows = n;
-  mesh.GridColumns = n;
-  for (int r = 0; r < n; ++r)
+  mesh.GridRows = rows;
+  mesh.GridColumns = columns;
+  for (int r = 0; r < rows; ++r)
   {
-    for (int c = 0; c < n; ++c)
+    for (int c = 0; c < columns; ++c)
     {
       const std::array<double, 3> p = point(r, c);
       mesh.Points.insert(mesh.Points.end(), p.begin(), p.end());
       mesh.GridIndex.insert(mesh.GridIndex.end(), { r, c });
     }
   }
-  mesh.Triangles = GridTriangles(n, n);
+  mesh.Triangles = GridTriangles(rows, columns);
   return mesh;
+}
+
+/** An n x n grid mesh, point (row r, column c) at point(r, c), two triangles a cell. */
+inline itk::SheetMesh
+SquareGridMesh(int n, const std::function<std::array<double, 3>(int, int)> & point)
+{
+  return GridMesh(n, n, point);
 }
 
 /** A spherical cap (non-developable) of radius R and opening half-angle alpha, as a grid. */
