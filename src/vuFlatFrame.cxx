@@ -215,7 +215,9 @@ StraightenRows(SheetMesh & flat)
   // Along most of its length the frame may turn by at most a tenth of a radian over half
   // the strip's width: a sheet bent more than that in its plane (a ring) is not a slightly
   // bent strip, and is left as it is. A short stretch turning faster (a jog where the trace
-  // of an inner turn curls, a few columns of a long strip) does not make it one.
+  // of an inner turn curls, a few columns of a long strip) does not make it one, unless it
+  // turns by half a radian over half the width: laid straight, it would be strained by half
+  // (the strain is the turn times the distance from the centre line) or folded.
   std::vector<double> turns(columns - 1);
   for (size_t c = 1; c < columns; ++c)
   {
@@ -223,8 +225,9 @@ StraightenRows(SheetMesh & flat)
     const double step = std::max(arc[c] - arc[c - 1], 1e-12);
     turns[c - 1] = turn / step * 0.5 * width;
   }
+  const double fastest = *std::max_element(turns.begin(), turns.end());
   std::nth_element(turns.begin(), turns.begin() + turns.size() / 2, turns.end());
-  if (turns[turns.size() / 2] > 0.1)
+  if (turns[turns.size() / 2] > 0.1 || fastest > 0.5)
   {
     return 0.0;
   }
