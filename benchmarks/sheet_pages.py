@@ -452,9 +452,9 @@ def main():
     args = parser.parse_args()
     def parse_overrides(kind, seed):
         overrides = {}
+        drawn = draw_scene(kind, seed)[0] if args.param else {}
         for item in args.param:
             key, value = item.split("=", 1)
-            drawn = draw_scene(kind, seed)[0]
             if key not in drawn:
                 raise SystemExit(f"no parameter {key!r}; the parameters: {', '.join(sorted(drawn))}")
             overrides[key] = type(drawn[key])(value)

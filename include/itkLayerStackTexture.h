@@ -57,7 +57,8 @@ namespace itk {
  *   brightness (a slab drifting towards a face, the sheet's edges) and pixel noise are not,
  *   so among focal slabs of a noisy scan the one that shows the writing scores highest.
  *   With `leaveOut` (a texture of the same size), the pixels where it is not finite are
- *   left out of the score (not of the filtering): a region where another sheet touches.
+ *   left out of the score (not of the filtering): where the sheet is off the surface the
+ *   stack was sampled about, or another sheet touches it.
  * - Quantiles(): the values of the finite pixels at the given ranks q (0..1; the value
  *   of rank round(q (n - 1)) of the n finite pixels sorted), exactly, by sampled selection
  *   in a few passes without copying the texture (a display window, a noise level). An

@@ -73,9 +73,10 @@ struct ReadableTextureSelection
   std::vector<ReadableTextureCandidate> Candidates;
   size_t                                Chosen{ 0 };
   /** Noisy scan with automatic side: the candidates are focal slabs scored by stroke contrast. */
-  bool   FocalSlabs{ false };
-  /** Focal slabs: the pixels left out of their scores, where another sheet's material
-   * lies in the stack's outermost layers (a sheet touching this one) or near it. */
+  bool FocalSlabs{ false };
+  /** Focal slabs: the pixels left out of their scores, where the sheet is off the
+   * mid-surface (the middle layer holds air: a bulge the mesh does not follow; an
+   * outermost layer holds material: another sheet touching this one) or near it. */
   size_t PixelsLeftOut{ 0 };
   double MedianRadius{ 0.0 };
   double SmoothSigma{ 0.0 };

@@ -364,7 +364,8 @@ LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigm
   detail::CheckLayerParameter(strokeSigma, false, "StrokeContrast", "the stroke sigma");
   if (leaveOut != nullptr && leaveOut->GetBufferedRegion().GetSize() != texture->GetBufferedRegion().GetSize())
   {
-    itkGenericExceptionMacro(<< "LayerStackTexture::StrokeContrast: the pixels to leave out are not the texture's size");
+    itkGenericExceptionMacro(
+      << "LayerStackTexture::StrokeContrast: the pixels to leave out are not the texture's size");
   }
   const float * keep = leaveOut != nullptr ? leaveOut->GetBufferPointer() : nullptr;
   const auto    fine = Smooth(texture, strokeSigma);
@@ -376,7 +377,8 @@ LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigm
   const size_t  n = texture->GetBufferedRegion().GetNumberOfPixels();
   for (size_t i = 0; i < n; ++i)
   {
-    b[i] = std::isfinite(f[i]) && std::isfinite(c[i]) && (keep == nullptr || std::isfinite(keep[i])) ? f[i] - c[i] : NaN;
+    b[i] =
+      std::isfinite(f[i]) && std::isfinite(c[i]) && (keep == nullptr || std::isfinite(keep[i])) ? f[i] - c[i] : NaN;
   }
   return InkContrast(band);
 }

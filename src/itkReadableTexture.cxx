@@ -62,10 +62,12 @@ Median(const TextureType * texture)
 }
 
 // NaN where the sheet is off the mid-surface, or within ForeignReach voxels of such a
-// pixel; 1 elsewhere. Null where no pixel or too many are off.
+// pixel; 1 elsewhere; `leftOut` counts the NaN pixels. Null (and 0) where no pixel or too
+// many are off.
 TextureType::Pointer
-OwnSheetPixels(const Image<float, 3> * stack, unsigned int layers, double voxel)
+OwnSheetPixels(const Image<float, 3> * stack, unsigned int layers, double voxel, size_t & leftOut)
 {
+  leftOut = 0;
   if (layers < 3)
   {
     return nullptr;
@@ -85,7 +87,7 @@ OwnSheetPixels(const Image<float, 3> * stack, unsigned int layers, double voxel)
   {
     return nullptr;
   }
-  auto          off = LayerStackTexture::LayerWindow(stack, 0, 1);
+  auto          off = LayerStackTexture::LayerWindow(stack, 0, 1); // a texture of the stack's size, overwritten
   float *       mark = off->GetBufferPointer();
   const size_t  n = off->GetBufferedRegion().GetNumberOfPixels();
   const float * middle = inner->GetBufferPointer();
@@ -93,9 +95,9 @@ OwnSheetPixels(const Image<float, 3> * stack, unsigned int layers, double voxel)
   size_t        count = 0;
   for (size_t i = 0; i < n; ++i)
   {
-    const bool displaced =
-      (std::isfinite(middle[i]) && middle[i] < level) || (std::isfinite(outer[0][i]) && outer[0][i] > level) ||
-      (std::isfinite(outer[1][i]) && outer[1][i] > level);
+    const bool displaced = (std::isfinite(middle[i]) && middle[i] < level) ||
+                           (std::isfinite(outer[0][i]) && outer[0][i] > level) ||
+                           (std::isfinite(outer[1][i]) && outer[1][i] > level);
     mark[i] = displaced ? 1.0f : 0.0f;
     count += displaced ? 1 : 0;
   }
@@ -108,7 +110,9 @@ OwnSheetPixels(const Image<float, 3> * stack, unsigned int layers, double voxel)
   const float * reach = near->GetBufferPointer();
   for (size_t i = 0; i < n; ++i)
   {
-    mark[i] = reach[i] > 1e-3f ? std::numeric_limits<float>::quiet_NaN() : 1.0f;
+    const bool within = reach[i] > 1e-3f;
+    mark[i] = within ? std::numeric_limits<float>::quiet_NaN() : 1.0f;
+    leftOut += within ? 1 : 0;
   }
   return off;
 }
@@ -187,21 +191,17 @@ SelectReadableTexture(const Image<float, 3> * stack, const ReadableTextureSettin
   if (selection.FocalSlabs)
   {
     const double strokeSigma = 0.5 * settings.Voxel;
-    const auto   own = OwnSheetPixels(stack, layers, settings.Voxel);
-    selection.PixelsLeftOut = 0;
-    if (own != nullptr)
-    {
-      const float * o = own->GetBufferPointer();
-      selection.PixelsLeftOut = static_cast<size_t>(
-        std::count_if(o, o + own->GetBufferedRegion().GetNumberOfPixels(), [](float v) { return !std::isfinite(v); }));
-    }
+    const auto   own = OwnSheetPixels(stack, layers, settings.Voxel, selection.PixelsLeftOut);
     for (const unsigned int count : { 3u, 5u })
     {
       for (unsigned int first = 0; first + count <= layers; ++first)
       {
         textures.push_back(denoise(LayerStackTexture::LayerWindow(stack, first, count)));
-        selection.Candidates.push_back(
-          { SideEnum::Both, false, LayerStackTexture::StrokeContrast(textures.back(), strokeSigma, own), first, count });
+        selection.Candidates.push_back({ SideEnum::Both,
+                                         false,
+                                         LayerStackTexture::StrokeContrast(textures.back(), strokeSigma, own),
+                                         first,
+                                         count });
       }
     }
   }

@@ -32,7 +32,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <iterator>
 #include <sstream>
 #include <unistd.h>
 
@@ -180,23 +179,19 @@ TextLegibility::Compute()
   // Non-finite pixels (NaN off an unwrapped sheet) take no part in it and take the median
   // of the finite ones: the sheet's background, ink covering a minority of it, so that the
   // sheet's outline does not read as a stroke.
-  const float *      buffer = m_Image->GetBufferPointer();
-  std::vector<float> values;
-  values.reserve(region.GetNumberOfPixels());
-  std::copy_if(
-    buffer, buffer + region.GetNumberOfPixels(), std::back_inserter(values), [](float v) { return std::isfinite(v); });
-  if (values.empty())
+  const float *             buffer = m_Image->GetBufferPointer();
+  const std::vector<double> median = LayerStackTexture::Quantiles(m_Image, { 0.5 });
+  if (median.empty())
   {
     itkExceptionMacro(<< "the image has no finite pixel");
   }
-  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
-  const float background = values[values.size() / 2];
+  const auto background = static_cast<float>(median.front());
   // The window of the image a person looks at (texture.png): the background dark, its
   // speckle below the black point, which tesseract would otherwise read as letters.
   const std::vector<double> shown = LayerStackTexture::DisplayWindow(m_Image, m_InkIsBright);
   const auto                low = static_cast<float>(shown[0]);
   const float               high = std::max(static_cast<float>(shown[1]), low + 1e-6f);
-  auto        finite = ImageType::New();
+  auto                      finite = ImageType::New();
   finite->CopyInformation(m_Image);
   finite->SetRegions(region);
   finite->Allocate();

@@ -312,24 +312,26 @@ BlankOtherSheets(const Image<float, 3> * volume, const Image<uint16_t, 3> * shee
   // (air, away from the sheets' blurred faces), a sample of them, drawn in a fixed order
   // so that a blanked region has the scan's own noise. A constant would be a patch without
   // noise, whose zero spread a texture's contrast measures take for signal.
-  std::vector<float>  air;
-  const SizeValueType stride = std::max<SizeValueType>(1, n / 200000);
-  auto                awayFromSheets = [&](SizeValueType v) {
+  // `visit` on each face-neighbour of voxel v inside the region, until it returns false;
+  // whether it never did.
+  const auto everyFaceNeighbour = [&](SizeValueType v, auto visit) {
     SizeValueType rest = v;
     for (int d = 2; d >= 0; --d)
     {
       const SizeValueType at = rest / strides[d];
       rest %= strides[d];
-      if ((at > 0 && label[v - strides[d]] != 0) || (at + 1 < size[d] && label[v + strides[d]] != 0))
+      if ((at > 0 && !visit(v - strides[d])) || (at + 1 < size[d] && !visit(v + strides[d])))
       {
         return false;
       }
     }
     return true;
   };
+  std::vector<float>  air;
+  const SizeValueType stride = std::max<SizeValueType>(1, n / 200000);
   for (SizeValueType v = 0; v < n; v += stride)
   {
-    if (label[v] == 0 && std::isfinite(in[v]) && awayFromSheets(v))
+    if (label[v] == 0 && std::isfinite(in[v]) && everyFaceNeighbour(v, [&](SizeValueType u) { return label[u] == 0; }))
     {
       air.push_back(in[v]);
     }
@@ -340,7 +342,7 @@ BlankOtherSheets(const Image<float, 3> * volume, const Image<uint16_t, 3> * shee
   }
   std::minstd_rand                      draw(20040601);
   std::uniform_int_distribution<size_t> pick(0, air.size() - 1);
-  auto out = Image<float, 3>::New();
+  auto                                  out = Image<float, 3>::New();
   out->CopyInformation(volume);
   out->SetRegions(volume->GetBufferedRegion());
   out->Allocate();
@@ -354,20 +356,13 @@ BlankOtherSheets(const Image<float, 3> * volume, const Image<uint16_t, 3> * shee
     }
     o[v] = air[pick(draw)];
     // Its unlabelled face-neighbours.
-    SizeValueType rest = v;
-    for (int d = 2; d >= 0; --d)
-    {
-      const SizeValueType at = rest / strides[d];
-      rest %= strides[d];
-      if (at > 0 && label[v - strides[d]] == 0)
+    everyFaceNeighbour(v, [&](SizeValueType u) {
+      if (label[u] == 0)
       {
-        o[v - strides[d]] = air[pick(draw)];
+        o[u] = air[pick(draw)];
       }
-      if (at + 1 < size[d] && label[v + strides[d]] == 0)
-      {
-        o[v + strides[d]] = air[pick(draw)];
-      }
-    }
+      return true;
+    });
   }
   return out;
 }

@@ -153,6 +153,37 @@ MiddleRowBend(const itk::SheetMesh & flat)
   }
   return bend;
 }
+
+// A grid mesh flattened without straightening its rows and with it: the middle row's
+// bend each time, the bend each report gives, and the straightened flat mesh's flipped
+// triangles and edge strain p95.
+struct Straightening
+{
+  double BendWithout{ 0.0 }, ReportedWithout{ 0.0 };
+  double BendWith{ 0.0 }, ReportedWith{ 0.0 };
+  size_t Flipped{ 0 };
+  double StrainP95{ 0.0 };
+};
+
+Straightening
+FlattenWithoutAndWithStraightening(const itk::SheetMesh & surface)
+{
+  itk::MassSpringFlatteningParameters parameters;
+  itk::MassSpringSheetFlattener       flattener;
+  itk::SheetMesh                      flat;
+  Straightening                       result;
+  parameters.StraightenRows = 0;
+  FlattenAndMeasure(flattener, surface, parameters, &flat);
+  result.BendWithout = MiddleRowBend(flat);
+  result.ReportedWithout = flattener.GetReport().RowBend;
+  parameters.StraightenRows = 1;
+  const auto c = FlattenAndMeasure(flattener, surface, parameters, &flat);
+  result.BendWith = MiddleRowBend(flat);
+  result.ReportedWith = flattener.GetReport().RowBend;
+  result.Flipped = c->GetNumberOfFlippedTriangles();
+  result.StrainP95 = c->GetEdgeStrainP95();
+  return result;
+}
 } // namespace
 
 TEST(MassSpringSheetFlattener, ALongStripBentInItsPlaneComesOutWithStraightRows)
@@ -164,29 +195,22 @@ TEST(MassSpringSheetFlattener, ALongStripBentInItsPlaneComesOutWithStraightRows)
     surface.Points[3 * i] *= grow;
     surface.Points[3 * i + 1] *= grow;
   }
-  itk::MassSpringFlatteningParameters parameters;
-  itk::MassSpringSheetFlattener       flattener;
-  itk::SheetMesh                      flat;
-  parameters.StraightenRows = 0;
-  FlattenAndMeasure(flattener, surface, parameters, &flat);
-  const double arc = MiddleRowBend(flat);
+  const Straightening strip = FlattenWithoutAndWithStraightening(surface);
+  const double        arc = strip.BendWithout;
   EXPECT_NEAR(arc, 4.9, 1.0);
-  EXPECT_EQ(flattener.GetReport().RowBend, 0.0);
-
-  parameters.StraightenRows = 1;
-  auto c = FlattenAndMeasure(flattener, surface, parameters, &flat);
-  EXPECT_LT(MiddleRowBend(flat), 0.05 * arc);
-  EXPECT_NEAR(flattener.GetReport().RowBend, arc, 0.2 * arc);
-  EXPECT_EQ(c->GetNumberOfFlippedTriangles(), 0u);
-  EXPECT_LE(c->GetEdgeStrainP95(), 0.005);
+  EXPECT_EQ(strip.ReportedWithout, 0.0);
+  EXPECT_LT(strip.BendWith, 0.05 * arc);
+  EXPECT_NEAR(strip.ReportedWith, arc, 0.2 * arc);
+  EXPECT_EQ(strip.Flipped, 0u);
+  EXPECT_LE(strip.StrainP95, 0.005);
 
   const itk::SheetMesh ring = vu::SquareGridMesh(25, [](int r, int c) {
     const double angle = 0.1 * c - 1.2, rho = 20.0 + 0.5 * r - 6.0;
     return std::array<double, 3>{ rho * std::sin(angle), rho * std::cos(angle), 0.0 };
   });
-  FlattenAndMeasure(flattener, ring, parameters, &flat);
-  EXPECT_LT(flattener.GetReport().RowBend, 0.5);
-  EXPECT_GT(MiddleRowBend(flat), 5.0);
+  const Straightening  laid = FlattenWithoutAndWithStraightening(ring);
+  EXPECT_LT(laid.ReportedWith, 0.5);
+  EXPECT_GT(laid.BendWith, 5.0);
 }
 
 // A strip bent into a gentle arc in its plane, as a tapered roll develops, with a short
@@ -202,8 +226,8 @@ TEST(MassSpringSheetFlattener, AGentleArcWithAShortJogIsStraightened)
   const double   jog = std::uniform_real_distribution<double>(2.5, 3.5)(random);
   std::cout << "seed " << seed << ": arc radius " << radius << ", jog of " << jog << " at column " << jogAt
             << std::endl;
-  constexpr int    Rows = 6, Columns = 151;
-  constexpr double Spacing = 2.0;
+  constexpr int        Rows = 6, Columns = 151;
+  constexpr double     Spacing = 2.0;
   const itk::SheetMesh strip = vu::GridMesh(Rows, Columns, [&](int r, int c) {
     // Columns along the arc; the first columns shifted across it, the shift fading over 3.
     const double shift = jog * std::clamp((jogAt - c) / 3.0, 0.0, 1.0);
@@ -211,20 +235,13 @@ TEST(MassSpringSheetFlattener, AGentleArcWithAShortJogIsStraightened)
     const double angle = Spacing * (c - 0.5 * (Columns - 1)) / radius;
     return std::array<double, 3>{ rho * std::sin(angle), rho * std::cos(angle), 0.0 };
   });
-  itk::MassSpringFlatteningParameters parameters;
-  itk::MassSpringSheetFlattener       flattener;
-  itk::SheetMesh                      flat;
-  parameters.StraightenRows = 0;
-  FlattenAndMeasure(flattener, strip, parameters, &flat);
-  const double arc = MiddleRowBend(flat);
-  parameters.StraightenRows = 1;
-  auto c = FlattenAndMeasure(flattener, strip, parameters, &flat);
-  std::cout << "bend " << arc << " -> " << MiddleRowBend(flat) << ", reported " << flattener.GetReport().RowBend
+  const Straightening  laid = FlattenWithoutAndWithStraightening(strip);
+  std::cout << "bend " << laid.BendWithout << " -> " << laid.BendWith << ", reported " << laid.ReportedWith
             << std::endl;
-  EXPECT_GT(arc, 10.0);
-  EXPECT_LT(MiddleRowBend(flat), 0.2 * arc);
-  EXPECT_GT(flattener.GetReport().RowBend, 0.5 * arc);
-  EXPECT_EQ(c->GetNumberOfFlippedTriangles(), 0u);
+  EXPECT_GT(laid.BendWithout, 10.0);
+  EXPECT_LT(laid.BendWith, 0.2 * laid.BendWithout);
+  EXPECT_GT(laid.ReportedWith, 0.5 * laid.BendWithout);
+  EXPECT_EQ(laid.Flipped, 0u);
 }
 
 // A 10-turn roll with a tight inner curl (2.5 mm radius, 0.75 mm pitch, 0.74 mm spacing):

@@ -204,7 +204,7 @@ TEST(ReadableTextureImageFilter, AnotherSheetTouchingIsNotTakenForWriting)
     profile[k] = static_cast<float>(0.5 * (std::erf((1.1 - d) / 0.9) + std::erf((1.1 + d) / 0.9)));
   }
   // Ink strokes: vertical and horizontal bars two pixels wide, in letter-sized boxes.
-  std::vector<uint8_t> ink(Columns * Rows, 0);
+  std::vector<uint8_t>                ink(Columns * Rows, 0);
   std::uniform_int_distribution<long> boxX(10, Columns - 26), boxY(15, Rows - 35);
   for (int letter = 0; letter < 10; ++letter)
   {
@@ -220,9 +220,11 @@ TEST(ReadableTextureImageFilter, AnotherSheetTouchingIsNotTakenForWriting)
   }
   // The other sheet's patch: a disc in the three outermost layers of the side away from the ink.
   std::uniform_real_distribution<double> where(0.25, 0.75), radius(8.0, 14.0);
-  const double cx = where(random) * Columns, cy = where(random) * Rows, r = radius(random);
-  auto stack = itk::Image<float, 3>::New();
-  itk::Image<float, 3>::SizeType size{ { static_cast<itk::SizeValueType>(Columns), static_cast<itk::SizeValueType>(Rows), Layers } };
+  const double                           cx = where(random) * Columns, cy = where(random) * Rows, r = radius(random);
+  auto                                   stack = itk::Image<float, 3>::New();
+  itk::Image<float, 3>::SizeType         size{
+    { static_cast<itk::SizeValueType>(Columns), static_cast<itk::SizeValueType>(Rows), Layers }
+  };
   stack->SetRegions(size);
   const double spacing[3] = { 0.25 * Voxel, 0.25 * Voxel, 0.25 * Voxel };
   stack->SetSpacing(spacing);
