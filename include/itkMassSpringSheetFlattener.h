@@ -131,7 +131,10 @@ ToString(SheetFlatteningPhaseEnum phase);
     "grid meshes, automatic coarsening: simulate at most about this many particles")                            \
   X(unsigned int, StraightenRows, 1, 0, 1, "straighten-rows", "straighten_rows",                                \
     "grid meshes: after relaxing, lay the rows straight (the slow in-plane bend a long strip "                  \
-    "keeps; a sheet rolled or folded about an axis develops with straight rows); 0: off")
+    "keeps; a sheet rolled or folded about an axis develops with straight rows); 0: off")         \
+  X(unsigned int, RestartFromDevelopedRows, 1, 0, 1, "restart-from-rows", "restart_from_developed_rows",        \
+    "grid meshes: when the flat sheet comes out with triangles turned over, relax it again from "               \
+    "its rows developed onto the plane and keep the flat sheet with fewer turned over; 0: off")
 // clang-format on
 
 /** Parameters of MassSpringSheetFlattener: the numeric ones of VU_MASS_SPRING_PARAMETERS
@@ -184,6 +187,11 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
   /** The in-plane bend laid straight (StraightenRows): the centre line's largest distance
    * from its chord before, in the mesh's units; 0 when the rows were not straightened. */
   double RowBend{ 0.0 };
+  /** Triangles turned over after the physical sequence when it left the sheet folded, so
+   * that it was relaxed again from its rows developed onto the plane (0: no restart), and
+   * whether that flat mesh, with fewer turned over, was kept. */
+  size_t FlippedBeforeRestart{ 0 };
+  bool   RestartKept{ false };
   /** What a caller should not miss: phases stopped at their step limit before they
    * converged, triangles turned over; empty when the flattening converged cleanly. */
   std::vector<std::string> Warnings;
@@ -211,7 +219,12 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
  *    RelaxationTolerance;
  * 4. straighten (grid meshes, StraightenRows): the slow in-plane bend a long strip keeps
  *    is laid straight, since a sheet rolled or folded about an axis develops with straight
- *    rows (the bend taken out is reported as RowBend).
+ *    rows (the bend taken out is reported as RowBend);
+ * 5. restart (grid meshes that came out with triangles turned over: a long roll whose
+ *    unrolling stopped at its step limit lies folded where it was pressed onto the plane):
+ *    the sheet's rows are developed onto the plane (FlatFrame::DevelopedRows), relaxed from
+ *    there on both levels and straightened; the result replaces the first when fewer of
+ *    its triangles are turned over (FlippedBeforeRestart, RestartKept).
  * The flat mesh (same points, same triangles, z = 0) is expressed in the plane: x along
  * the sheet (on grid meshes the mean direction of the rows, towards increasing columns,
  * i.e. away from the sheet's start, so that what was written along the sheet runs along

@@ -84,11 +84,11 @@ struct VirtualUnwrapping_EXPORT SheetMesh
   std::vector<double>
   ComputeVertexNormals() const;
 
-  /** A grid mesh laid out on its grid, a first flat guess before any simulation: point
-   * (row r, column c) at (u, v, 0) with u its arc length along row r from the row's first
-   * point and v = r times the mean distance between neighbouring rows (or (R - 1 - r) times
-   * it, see below). Exact for sheets
-   * bent about the roll axis only (a cylinder, a spiral of constant width); used to map a
+  /** A grid mesh laid out on its grid, a first flat guess before any simulation: each row
+   * straight along its own arc length, each next row placed beside it by the median step
+   * between the two rows (its part along the row's tangent and across it), as the
+   * flattener's restart lays a sheet (FlatFrame::DevelopedRows). Exact for sheets bent
+   * about the roll axis only (a cylinder, a spiral of constant width); used to map a
    * texture onto a sheet not yet flattened. Same points and triangles. Throws for meshes
    * without a grid. Rows are numbered downwards instead where that makes the triangles
    * counter-clockwise seen from +z, as MassSpringSheetFlattener lays them. */

@@ -546,6 +546,14 @@ AddWarnings(MassSpringFlatteningReport & report, size_t triangles)
       report.Warnings.push_back(text.str());
     }
   }
+  if (report.FlippedBeforeRestart > 0)
+  {
+    std::ostringstream text;
+    text << "the sheet came out of the unroll and flatten phases with " << report.FlippedBeforeRestart
+         << " triangles turned over; relaxed again from its rows developed onto the plane, "
+         << (report.RestartKept ? "which is kept" : "which did no better and is not kept");
+    report.Warnings.push_back(text.str());
+  }
   if (report.FlippedTriangles > 0)
   {
     std::ostringstream text;
@@ -668,29 +676,56 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   }
   m_Report.SpringEvaluations += system.GetNumberOfForceEvaluations() * system.GetNumberOfSprings();
 
-  SheetMesh flat = surface;
-  if (factor == 1)
-  {
-    flat.Points = system.GetPositions();
-  }
-  else
-  {
-    // Carry the coarse result to every particle and relax the full sheet on the plane.
-    const std::vector<double> prolonged = CoarseToFine::Prolong(surface, simulated, factor, system.GetPositions());
-    MassSpringSystem          fine;
-    BuildSystem(surface, p, fine);
-    fine.SetPositions(prolonged);
-    m_Report.Springs = fine.GetNumberOfSprings();
-    m_Report.Phases.push_back(RunRelaxation(fine, SheetFlatteningPhaseEnum::RelaxFull, p, m_Callback));
-    m_Report.SpringEvaluations += fine.GetNumberOfForceEvaluations() * fine.GetNumberOfSprings();
-    flat.Points = fine.GetPositions();
-  }
-  if (p.StraightenRows != 0)
-  {
-    m_Report.RowBend = FlatFrame::StraightenRows(flat);
-  }
-  FlatFrame::Normalise(flat);
+  // The simulated level's flat positions carried to the whole sheet, relaxed there, its
+  // rows straightened, in the final frame.
+  auto finish = [&](const std::vector<double> & simulatedFlat, double & rowBend) {
+    SheetMesh whole = surface;
+    if (factor == 1)
+    {
+      whole.Points = simulatedFlat;
+    }
+    else
+    {
+      const std::vector<double> prolonged = CoarseToFine::Prolong(surface, simulated, factor, simulatedFlat);
+      MassSpringSystem          fine;
+      BuildSystem(surface, p, fine);
+      fine.SetPositions(prolonged);
+      m_Report.Springs = fine.GetNumberOfSprings();
+      m_Report.Phases.push_back(RunRelaxation(fine, SheetFlatteningPhaseEnum::RelaxFull, p, m_Callback));
+      m_Report.SpringEvaluations += fine.GetNumberOfForceEvaluations() * fine.GetNumberOfSprings();
+      whole.Points = fine.GetPositions();
+    }
+    rowBend = p.StraightenRows != 0 ? FlatFrame::StraightenRows(whole) : 0.0;
+    FlatFrame::Normalise(whole);
+    return whole;
+  };
+  SheetMesh flat = finish(system.GetPositions(), m_Report.RowBend);
   m_Report.FlippedTriangles = FlatFrame::TurnedOverTriangles(flat);
+
+  // 4. A sheet that came out folded (a long roll whose unrolling stopped at its step
+  // limit, pressed onto the plane as it hung) starts again from its rows developed onto
+  // the plane, fold-free, and is relaxed from there; the flat mesh with fewer triangles
+  // turned over is kept.
+  if (p.RestartFromDevelopedRows != 0 && m_Report.FlippedTriangles > 0 && simulated.IsGridStructured())
+  {
+    const std::vector<double> developed = FlatFrame::DevelopedRows(simulated);
+    MassSpringSystem          restart;
+    BuildSystem(simulated, p, restart);
+    restart.SetPositions(developed);
+    m_Report.Phases.push_back(RunRelaxation(restart, SheetFlatteningPhaseEnum::Relax, p, m_Callback));
+    m_Report.SpringEvaluations += restart.GetNumberOfForceEvaluations() * restart.GetNumberOfSprings();
+    double          bend = 0.0;
+    const SheetMesh again = finish(restart.GetPositions(), bend);
+    const size_t    flipped = FlatFrame::TurnedOverTriangles(again);
+    m_Report.FlippedBeforeRestart = m_Report.FlippedTriangles;
+    m_Report.RestartKept = flipped < m_Report.FlippedTriangles;
+    if (m_Report.RestartKept)
+    {
+      flat = again;
+      m_Report.RowBend = bend;
+      m_Report.FlippedTriangles = flipped;
+    }
+  }
   AddWarnings(m_Report, flat.GetNumberOfTriangles());
   m_Report.Seconds = Seconds(start);
   return flat;

@@ -16,6 +16,7 @@
  *
  *=========================================================================*/
 #include "itkSheetMesh.h"
+#include "vuFlatFrame.h"
 
 #include "itkMacro.h"
 
@@ -180,58 +181,8 @@ SheetMesh::ComputeGridLayout() const
   {
     itkGenericExceptionMacro(<< "SheetMesh::ComputeGridLayout: the mesh has no grid");
   }
-  const size_t         rows = static_cast<size_t>(GridRows), columns = static_cast<size_t>(GridColumns);
-  std::vector<int64_t> at(rows * columns, -1);
-  for (size_t i = 0; i < GetNumberOfPoints(); ++i)
-  {
-    at[static_cast<size_t>(GridIndex[2 * i]) * columns + static_cast<size_t>(GridIndex[2 * i + 1])] =
-      static_cast<int64_t>(i);
-  }
-  auto distance = [this](int64_t a, int64_t b) {
-    double sum = 0.0;
-    for (unsigned d = 0; d < 3; ++d)
-    {
-      const double e = Points[3 * a + d] - Points[3 * b + d];
-      sum += e * e;
-    }
-    return std::sqrt(sum);
-  };
-  double rowStep = 0.0;
-  size_t rowSteps = 0;
-  for (size_t r = 0; r + 1 < rows; ++r)
-  {
-    for (size_t c = 0; c < columns; ++c)
-    {
-      if (at[r * columns + c] >= 0 && at[(r + 1) * columns + c] >= 0)
-      {
-        rowStep += distance(at[r * columns + c], at[(r + 1) * columns + c]);
-        ++rowSteps;
-      }
-    }
-  }
-  rowStep = rowSteps > 0 ? rowStep / static_cast<double>(rowSteps) : 1.0;
   SheetMesh layout = *this;
-  for (size_t r = 0; r < rows; ++r)
-  {
-    double  u = 0.0;
-    int64_t previous = -1;
-    for (size_t c = 0; c < columns; ++c)
-    {
-      const int64_t i = at[r * columns + c];
-      if (i < 0)
-      {
-        continue;
-      }
-      if (previous >= 0)
-      {
-        u += distance(previous, i);
-      }
-      layout.Points[3 * i] = u;
-      layout.Points[3 * i + 1] = static_cast<double>(r) * rowStep;
-      layout.Points[3 * i + 2] = 0.0;
-      previous = i;
-    }
-  }
+  layout.Points = FlatFrame::DevelopedRows(*this);
   // As the flattener lays a sheet: triangles counter-clockwise seen from +z (the side the
   // 3D triangles' normals face), so a texture over the layout reads as over the flat mesh.
   double signedArea = 0.0;
@@ -244,7 +195,11 @@ SheetMesh::ComputeGridLayout() const
   }
   if (signedArea < 0.0)
   {
-    const double top = static_cast<double>(rows - 1) * rowStep;
+    double top = 0.0;
+    for (size_t i = 0; i < layout.GetNumberOfPoints(); ++i)
+    {
+      top = std::max(top, layout.Points[3 * i + 1]);
+    }
     for (size_t i = 0; i < layout.GetNumberOfPoints(); ++i)
     {
       layout.Points[3 * i + 1] = top - layout.Points[3 * i + 1];

@@ -66,6 +66,95 @@ ToPlane(const std::vector<double> & x, const Vec3 & origin, const Vec3 & u, cons
   return planar;
 }
 
+std::vector<double>
+DevelopedRows(const SheetMesh & mesh)
+{
+  if (!mesh.IsGridStructured() || mesh.GridRows < 1 || mesh.GridColumns < 1)
+  {
+    return {};
+  }
+  const std::vector<int64_t>  at = CoarseToFine::GridLookup(mesh);
+  const size_t                rows = static_cast<size_t>(mesh.GridRows);
+  const size_t                columns = static_cast<size_t>(mesh.GridColumns);
+  const std::vector<double> & x = mesh.Points;
+  auto                        point = [&](int64_t i) { return PointOf(x, static_cast<size_t>(i)); };
+  // Each row's arc length at its columns (NaN where the grid has no point).
+  std::vector<double> arc(rows * columns, std::numeric_limits<double>::quiet_NaN());
+  for (size_t r = 0; r < rows; ++r)
+  {
+    double  u = 0.0;
+    int64_t previous = -1;
+    for (size_t c = 0; c < columns; ++c)
+    {
+      const int64_t i = at[r * columns + c];
+      if (i < 0)
+      {
+        continue;
+      }
+      if (previous >= 0)
+      {
+        u += (point(i) - point(previous)).norm();
+      }
+      arc[r * columns + c] = u;
+      previous = i;
+    }
+  }
+  auto median = [](std::vector<double> & v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  // Row r's offset along x and its place along y.
+  std::vector<double> shift(rows, 0.0), place(rows, 0.0);
+  double              lastStep = 0.0;
+  std::vector<double> alongShifts, acrossSteps;
+  for (size_t r = 0; r + 1 < rows; ++r)
+  {
+    alongShifts.clear();
+    acrossSteps.clear();
+    for (size_t c = 0; c < columns; ++c)
+    {
+      const int64_t here = at[r * columns + c], next = at[(r + 1) * columns + c];
+      if (here < 0 || next < 0)
+      {
+        continue;
+      }
+      // The row's tangent at the column, from its neighbours in the row.
+      const int64_t before = c > 0 ? at[r * columns + c - 1] : -1;
+      const int64_t after = c + 1 < columns ? at[r * columns + c + 1] : -1;
+      if (before < 0 && after < 0)
+      {
+        continue;
+      }
+      const Vec3   tangent = (point(after >= 0 ? after : here) - point(before >= 0 ? before : here)).normalized();
+      const Vec3   step = point(next) - point(here);
+      const double along = step.dot(tangent);
+      alongShifts.push_back(shift[r] + arc[r * columns + c] + along - arc[(r + 1) * columns + c]);
+      acrossSteps.push_back(std::sqrt(std::max(0.0, step.squaredNorm() - along * along)));
+    }
+    if (!alongShifts.empty())
+    {
+      shift[r + 1] = median(alongShifts);
+      lastStep = median(acrossSteps);
+    }
+    else
+    {
+      shift[r + 1] = shift[r];
+    }
+    place[r + 1] = place[r] + lastStep;
+  }
+  std::vector<double> flat(x.size(), 0.0);
+  for (size_t k = 0; k < at.size(); ++k)
+  {
+    if (at[k] >= 0)
+    {
+      const size_t i = static_cast<size_t>(at[k]);
+      flat[3 * i] = shift[k / columns] + arc[k];
+      flat[3 * i + 1] = place[k / columns];
+    }
+  }
+  return flat;
+}
+
 namespace {
 // The mean direction of a flat grid mesh's rows (from each point to the next column's),
 // in the plane; zero when the grid has no two neighbouring columns.

@@ -260,33 +260,59 @@ TEST(MassSpringSheetFlattener, TightInnerCurlOfALongRollDoesNotFoldOver)
 // few steps is dropped onto the plane still rolled, and the report names the phases that
 // stopped at their step limit and counts the triangles turned over, as the distortion
 // measure does; a converged flattening has nothing to say.
-TEST(MassSpringSheetFlattener, AnUnfinishedUnrollIsReportedNotHidden)
+// A roll whose unrolling stops long before it hangs flat is pressed onto the plane as it
+// hangs, folded; the flattener says so, and starts again from the roll's rows developed
+// onto the plane. The roll's size and the step limit are drawn at run time.
+TEST(MassSpringSheetFlattener, AnUnfinishedUnrollIsReportedAndStartsAgainFromItsRows)
 {
-  const itk::SheetMesh          surface = vu::SpiralRollMesh(10.0, 4.0, 3.0, 2.0, 30.0, nullptr);
+  std::random_device                     device;
+  const unsigned int                     seed = device();
+  std::mt19937                           random(seed);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const double                           turns = 2.5 + 1.5 * uniform(random);
+  const double                           width = 2.0 + 2.0 * uniform(random);
+  const unsigned int                     steps = 2 + static_cast<unsigned int>(8 * uniform(random));
+  std::cout << "seed " << seed << ": " << turns << " turns, width " << width << ", " << steps << " steps a phase"
+            << std::endl;
+  const itk::SheetMesh          surface = vu::SpiralRollMesh(10.0, 4.0, turns, width, 30.0, nullptr);
   itk::MassSpringSheetFlattener converged;
   const itk::SheetMesh          good = converged.Flatten(surface);
   EXPECT_TRUE(converged.GetReport().Warnings.empty());
+  EXPECT_EQ(converged.GetReport().FlippedBeforeRestart, 0u);
   EXPECT_EQ(converged.GetReport().FlippedTriangles,
             vu::MeasureDistortion(surface, good)->GetNumberOfFlippedTriangles());
 
   itk::MassSpringFlatteningParameters parameters;
-  parameters.MaximumStepsPerPhase = 3;
+  parameters.MaximumStepsPerPhase = steps;
+  parameters.RestartFromDevelopedRows = 0;
+  itk::MassSpringSheetFlattener folded;
+  auto                          f = FlattenAndMeasure(folded, surface, parameters);
+  EXPECT_GT(f->GetNumberOfFlippedTriangles(), 0u);
+  EXPECT_EQ(folded.GetReport().FlippedTriangles, f->GetNumberOfFlippedTriangles());
+
+  parameters.RestartFromDevelopedRows = 1;
   itk::MassSpringSheetFlattener unfinished;
   auto                          c = FlattenAndMeasure(unfinished, surface, parameters);
   const auto &                  report = unfinished.GetReport();
-  EXPECT_GT(c->GetNumberOfFlippedTriangles(), 0u);
-  EXPECT_EQ(report.FlippedTriangles, c->GetNumberOfFlippedTriangles());
-  bool unrollNamed = false;
-  bool flipsNamed = false;
-  for (const std::string & w : report.Warnings)
-  {
-    std::cout << "warning: " << w << std::endl;
-    unrollNamed |= w.find("unroll phase stopped at its step limit") != std::string::npos;
-    flipsNamed |= w.find(std::to_string(report.FlippedTriangles) + " of " +
-                         std::to_string(surface.GetNumberOfTriangles()) + " triangles") != std::string::npos;
-  }
-  EXPECT_TRUE(unrollNamed);
-  EXPECT_TRUE(flipsNamed);
+  EXPECT_EQ(c->GetNumberOfFlippedTriangles(), 0u);
+  EXPECT_EQ(report.FlippedTriangles, 0u);
+  EXPECT_LT(c->GetEdgeStrainP95(), 1e-3);
+  EXPECT_EQ(report.FlippedBeforeRestart, folded.GetReport().FlippedTriangles);
+  EXPECT_TRUE(report.RestartKept);
+  auto named = [](const itk::MassSpringFlatteningReport & r, const std::string & text) {
+    bool found = false;
+    for (const std::string & w : r.Warnings)
+    {
+      std::cout << "warning: " << w << std::endl;
+      found |= w.find(text) != std::string::npos;
+    }
+    return found;
+  };
+  EXPECT_TRUE(named(report, "unroll phase stopped at its step limit"));
+  EXPECT_TRUE(named(report, "with " + std::to_string(report.FlippedBeforeRestart) + " triangles turned over"));
+  EXPECT_TRUE(named(folded.GetReport(),
+                    std::to_string(folded.GetReport().FlippedTriangles) + " of " +
+                      std::to_string(surface.GetNumberOfTriangles()) + " triangles"));
 }
 
 TEST(MassSpringSheetFlattener, DomeIsFlattenedWithoutFlipsAndItsDistortionReported)

@@ -164,6 +164,8 @@ ToJson(const itk::MassSpringFlatteningReport & report)
            { "seconds", report.Seconds },
            { "flipped_triangles", report.FlippedTriangles },
            { "row_bend_straightened", report.RowBend },
+           { "restart",
+             { { "flipped_triangles_before", report.FlippedBeforeRestart }, { "kept", report.RestartKept } } },
            { "warnings", report.Warnings },
            { "phases", phases } };
 }
