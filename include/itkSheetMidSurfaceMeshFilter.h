@@ -274,7 +274,9 @@ private:
     uint16_t                               SplitLabel{ 0 };
   };
   using SheetImageType = Image<uint8_t, 3>;
-  using LabelImageType = Image<SizeValueType, 3>;
+  /** The pieces' labels: 4 bytes a voxel (a scan of 4 G voxels holds fewer pieces). */
+  using LabelPixelType = uint32_t;
+  using LabelImageType = Image<LabelPixelType, 3>;
   /** The mask's pieces (face-connected components, largest first): their labels, the
    * intensities (or null), their bounding boxes and sizes (by label), and which are done
    * (meshed as part of a sheet, dropped or counted as too small). */

@@ -79,6 +79,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   components->FullyConnectedOff();
   auto relabel = RelabelComponentImageFilter<LabelImageType, LabelImageType>::New();
   relabel->SetInput(components->GetOutput());
+  relabel->InPlaceOn();
   relabel->Update();
   const LabelImageType * labels = relabel->GetOutput();
   m_Report = SheetMidSurfaceReport{};
@@ -479,9 +480,9 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::LabelSheets(const LabelImage
   m_SheetLabels->SetRegions(labels->GetBufferedRegion());
   m_SheetLabels->Allocate();
   m_SheetLabels->FillBuffer(0);
-  uint16_t *            out = m_SheetLabels->GetBufferPointer();
-  const SizeValueType * in = labels->GetBufferPointer();
-  const SizeValueType   n = labels->GetBufferedRegion().GetNumberOfPixels();
+  uint16_t *             out = m_SheetLabels->GetBufferPointer();
+  const LabelPixelType * in = labels->GetBufferPointer();
+  const SizeValueType    n = labels->GetBufferedRegion().GetNumberOfPixels();
   for (size_t i = 0; i < m_Sheets.size(); ++i)
   {
     const Sheet & sheet = m_Sheets[i];
@@ -553,7 +554,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::PiecesOnMesh(const TLabelIma
     }
   }
   std::vector<SizeValueType> on(group.size(), 0), all(group.size(), 0);
-  const SizeValueType *      label = labels->GetBufferPointer();
+  const LabelPixelType *     label = labels->GetBufferPointer();
   for (SizeValueType v = 0; v < nearMesh.size(); ++v)
   {
     if (label[v] < group.size() && group[label[v]] != 0)

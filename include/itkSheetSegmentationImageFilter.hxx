@@ -307,7 +307,8 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
   auto progress = ProgressAccumulator::New();
   progress->SetMiniPipelineFilter(this);
 
-  using LabelImageType = Image<SizeValueType, ImageDimension>;
+  // Labels of 4 bytes a voxel, relabelled in place.
+  using LabelImageType = Image<uint32_t, ImageDimension>;
   const typename MaskImageType::Pointer candidates = ThresholdCandidates(input, progress);
   auto components = ConnectedComponentImageFilter<MaskImageType, LabelImageType>::New();
   components->SetInput(candidates);
@@ -315,6 +316,7 @@ SheetSegmentationImageFilter<TInputImage, TMaskImage>::GenerateData()
   auto relabel = RelabelComponentImageFilter<LabelImageType, LabelImageType>::New();
   relabel->SetInput(components->GetOutput());
   relabel->SetMinimumObjectSize(m_MinimumComponentSize);
+  relabel->InPlaceOn();
   auto keep = BinaryThresholdImageFilter<LabelImageType, MaskImageType>::New();
   keep->SetInput(relabel->GetOutput());
   keep->SetLowerThreshold(1);

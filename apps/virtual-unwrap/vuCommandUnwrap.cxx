@@ -288,6 +288,42 @@ FlipRows(const TImage * image)
   return result;
 }
 
+// FlipRows on the image itself, rows swapped in its own buffer (the layer stack, the largest
+// image the tool writes, is not copied); an image whose buffer does not start at the origin
+// is flipped into a copy.
+template <typename TImage>
+typename TImage::Pointer
+FlipRowsInPlace(TImage * image)
+{
+  const auto & region = image->GetLargestPossibleRegion();
+  if (region.GetIndex() != typename TImage::IndexType() || image->GetBufferedRegion() != region)
+  {
+    return FlipRows(image);
+  }
+  typename TImage::IndexType last = region.GetIndex();
+  last[1] = static_cast<itk::IndexValueType>(region.GetSize(1)) - 1;
+  typename TImage::PointType origin;
+  image->TransformIndexToPhysicalPoint(last, origin);
+  typename TImage::DirectionType reverse;
+  reverse.SetIdentity();
+  reverse[1][1] = -1.0;
+  const typename TImage::DirectionType direction = image->GetDirection() * reverse;
+  const itk::SizeValueType             columns = region.GetSize(0), rows = region.GetSize(1);
+  const itk::SizeValueType             planes = region.GetNumberOfPixels() / (columns * rows);
+  auto *                               buffer = image->GetBufferPointer();
+  for (itk::SizeValueType plane = 0; plane < planes; ++plane)
+  {
+    for (itk::SizeValueType row = 0; row < rows / 2; ++row)
+    {
+      auto * top = buffer + (plane * rows + row) * columns;
+      std::swap_ranges(top, top + columns, buffer + (plane * rows + rows - 1 - row) * columns);
+    }
+  }
+  image->SetOrigin(origin);
+  image->SetDirection(direction);
+  return image;
+}
+
 template <typename TImage>
 void
 WriteImageFile(const TImage * image, const fs::path & path)
@@ -691,7 +727,8 @@ WriteResults(const Results & results, const TexturerType & texturer, OutputStagi
   // is written, given two threads or more.
   auto writeTiffs = [&]() {
     WriteImageFile(results.Texture.GetPointer(), staging / "texture.tif");
-    WriteImageFile(FlipRows(results.Layers.GetPointer()).GetPointer(), staging / "layers.tif");
+    // Flipped in its own buffer: nothing reads the stack after it is written.
+    WriteImageFile(FlipRowsInPlace(results.Layers.GetPointer()).GetPointer(), staging / "layers.tif");
   };
   std::future<void> tiffs;
   if (itk::MultiThreaderBase::GetGlobalDefaultNumberOfThreads() > 1)
