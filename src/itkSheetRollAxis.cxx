@@ -28,6 +28,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <sstream>
 
@@ -38,47 +39,43 @@ namespace itk {
 namespace {
 using IntensityImageType = SheetRollAxis::IntensityImageType;
 
-std::array<IntensityImageType::Pointer, 3>
-GaussianDerivatives(const IntensityImageType * input, const IntensityImageType::SpacingType & sigmas)
+IntensityImageType::Pointer
+GaussianDerivative(const IntensityImageType * input, const IntensityImageType::SpacingType & sigmas, unsigned int d)
 {
-  // The derivatives of itk::GradientRecursiveGaussianImageFilter, value for value (the
-  // same recursive filters, sigmas and order: the derivative along d with the last sigma,
-  // then smoothing along the other two axes with the first and second), per voxel. Its
-  // single-threaded copy of every derivative into a vector image, per physical unit, and
-  // pass over it for the direction are left out (the caller divides by the spacing and
+  // The derivative along d of itk::GradientRecursiveGaussianImageFilter, value for value
+  // (the same recursive filters, sigmas and order: the derivative along d with the last
+  // sigma, then smoothing along the other two axes with the first and second), per voxel.
+  // Its single-threaded copy of every derivative into a vector image, per physical unit,
+  // and pass over it for the direction are left out (the caller divides by the spacing and
   // applies the direction only at the voxels the tensor reads): on a scan of 180 M voxels
   // those took six seconds on one thread.
   using FilterType = RecursiveGaussianImageFilter<IntensityImageType, IntensityImageType>;
-  std::array<IntensityImageType::Pointer, 3> derivatives;
-  for (unsigned int d = 0; d < 3; ++d)
+  auto derivative = FilterType::New();
+  derivative->SetInput(input);
+  derivative->SetOrder(GaussianOrderEnum::FirstOrder);
+  derivative->SetNormalizeAcrossScale(false);
+  derivative->SetSigma(sigmas[2]);
+  derivative->SetDirection(d);
+  derivative->InPlaceOff();
+  // The filters stay referenced until the update: an output keeps no hold on its source.
+  std::array<FilterType::Pointer, 3> chain{ derivative, FilterType::New(), FilterType::New() };
+  unsigned int                       direction = 0;
+  for (unsigned int i = 0; i < 2; ++i, ++direction)
   {
-    auto derivative = FilterType::New();
-    derivative->SetInput(input);
-    derivative->SetOrder(GaussianOrderEnum::FirstOrder);
-    derivative->SetNormalizeAcrossScale(false);
-    derivative->SetSigma(sigmas[2]);
-    derivative->SetDirection(d);
-    derivative->InPlaceOff();
-    // The filters stay referenced until the update: an output keeps no hold on its source.
-    std::array<FilterType::Pointer, 3> chain{ derivative, FilterType::New(), FilterType::New() };
-    unsigned int                       direction = 0;
-    for (unsigned int i = 0; i < 2; ++i, ++direction)
-    {
-      direction += direction == d ? 1 : 0;
-      const FilterType::Pointer & smoothing = chain[i + 1];
-      smoothing->SetInput(chain[i]->GetOutput());
-      smoothing->SetOrder(GaussianOrderEnum::ZeroOrder);
-      smoothing->SetNormalizeAcrossScale(false);
-      smoothing->SetSigma(sigmas[i]);
-      smoothing->SetDirection(direction);
-      smoothing->InPlaceOn();
-    }
-    const FilterType::Pointer & last = chain[2];
-    last->Update();
-    derivatives[d] = last->GetOutput();
-    derivatives[d]->DisconnectPipeline();
+    direction += direction == d ? 1 : 0;
+    const FilterType::Pointer & smoothing = chain[i + 1];
+    smoothing->SetInput(chain[i]->GetOutput());
+    smoothing->SetOrder(GaussianOrderEnum::ZeroOrder);
+    smoothing->SetNormalizeAcrossScale(false);
+    smoothing->SetSigma(sigmas[i]);
+    smoothing->SetDirection(direction);
+    smoothing->InPlaceOn();
   }
-  return derivatives;
+  const FilterType::Pointer & last = chain[2];
+  last->Update();
+  IntensityImageType::Pointer result = last->GetOutput();
+  result->DisconnectPipeline();
+  return result;
 }
 } // namespace
 
@@ -111,15 +108,10 @@ SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageTy
     }
     input = maskIntensities;
   }
-  // Sigma: one voxel along each axis (as ITK's gradient filter assigns a sigma array).
-  const std::array<IntensityImageType::Pointer, 3> derivatives = GaussianDerivatives(input, sheetMask->GetSpacing());
-  const auto &                                     step = input->GetSpacing();
-  const float *                                    derivative[3] = { derivatives[0]->GetBufferPointer(),
-                                                                     derivatives[1]->GetBufferPointer(),
-                                                                     derivatives[2]->GetBufferPointer() };
-  const uint8_t *                                  mask = sheetMask->GetBufferPointer();
-  const auto                                       size = sheetMask->GetBufferedRegion().GetSize();
-  const auto &                                     direction = sheetMask->GetDirection();
+  const auto &    step = input->GetSpacing();
+  const uint8_t * mask = sheetMask->GetBufferPointer();
+  const auto      size = sheetMask->GetBufferedRegion().GetSize();
+  const auto &    direction = sheetMask->GetDirection();
   // Slice by slice in parallel, then summed in slice order (the same sum on any number of
   // threads). The air well away from the sheet (no material within NoiseProbe voxels along
   // any axis) measures the noise's own tensor per voxel, which is taken off the sheet's
@@ -127,11 +119,8 @@ SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageTy
   // projection noise more within the slices than across them, which tips the axis towards
   // the slice normal.
   constexpr long NoiseProbe = 3;
-  // Per slice: the sheet's and the air's tensor sums (entries 0-8) and voxel counts (9).
-  std::vector<std::array<double, 10>> sheetSums(size[2], std::array<double, 10>{});
-  std::vector<std::array<double, 10>> airSums(size[2], std::array<double, 10>{});
-  const long nx = static_cast<long>(size[0]), ny = static_cast<long>(size[1]), nz = static_cast<long>(size[2]);
-  auto       material = [&](long i, long j, long k) {
+  const long     nx = static_cast<long>(size[0]), ny = static_cast<long>(size[1]), nz = static_cast<long>(size[2]);
+  auto           material = [&](long i, long j, long k) {
     return i >= 0 && j >= 0 && k >= 0 && i < nx && j < ny && k < nz && mask[(k * ny + j) * nx + i] != 0;
   };
   auto farFromSheet = [&](long i, long j, long k) {
@@ -145,39 +134,98 @@ SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageTy
     }
     return true;
   };
+  // The voxels the tensor reads, per slice in row order (offsets within the slice): the
+  // sheet's, and the air's from every other voxel of every other row (a sample is enough
+  // for its mean), with their three derivatives. The derivatives are computed one at a
+  // time and kept only there: three float images of the sheet's box held at once were the
+  // largest part of the mesh stage's memory.
+  struct SliceReads
+  {
+    std::vector<uint32_t>             Offsets[2]; // 0: sheet, 1: air
+    std::vector<std::array<float, 3>> Values[2];
+  };
+  if (size[0] * size[1] > std::numeric_limits<uint32_t>::max())
+  {
+    itkGenericExceptionMacro(<< "roll axis: slices of " << size[0] << " x " << size[1] << " voxels are too large");
+  }
+  std::vector<SliceReads> reads(size[2]);
   ForEachImageRow(
     sheetMask, sheetMask->GetBufferedRegion(), [&](SizeValueType k, SizeValueType j, const uint8_t * row) {
-      const SizeValueType rowStart = row - mask;
       for (size_t i = 0; i < size[0]; ++i)
       {
-        // The air's mean from every other voxel of every other row: a sample is enough.
         const bool onSheet = row[i] != 0;
         if (!onSheet && (sheetIntensity == nullptr || i % 2 != 0 || j % 2 != 0 ||
                          !farFromSheet(static_cast<long>(i), static_cast<long>(j), static_cast<long>(k))))
         {
           continue;
         }
-        std::array<double, 10> & sum = onSheet ? sheetSums[k] : airSums[k];
-        // The gradient in the physical frame: per physical unit, as the gradient filter
-        // gives it (divided in double, then float), then the image's direction applied.
-        float perUnit[3];
-        for (unsigned d = 0; d < 3; ++d)
-        {
-          perUnit[d] = static_cast<float>(static_cast<double>(derivative[d][rowStart + i]) / step[d]);
-        }
-        const CovariantVector<float, 3> local(perUnit);
-        CovariantVector<float, 3>       physical;
-        input->TransformLocalVectorToPhysicalVector(local, physical);
-        for (unsigned r = 0; r < 3; ++r)
-        {
-          for (unsigned c = 0; c < 3; ++c)
-          {
-            sum[3 * r + c] += static_cast<double>(physical[r]) * static_cast<double>(physical[c]);
-          }
-        }
-        sum[9] += 1.0;
+        reads[k].Offsets[onSheet ? 0 : 1].push_back(static_cast<uint32_t>(j * size[0] + i));
       }
     });
+  for (auto & slice : reads)
+  {
+    for (unsigned which = 0; which < 2; ++which)
+    {
+      slice.Offsets[which].shrink_to_fit();
+      slice.Values[which].resize(slice.Offsets[which].size());
+    }
+  }
+  // Sigma: one voxel along each axis (as ITK's gradient filter assigns a sigma array).
+  const SizeValueType sliceVoxels = size[0] * size[1];
+  for (unsigned int d = 0; d < 3; ++d)
+  {
+    const IntensityImageType::Pointer derivative = GaussianDerivative(input, sheetMask->GetSpacing(), d);
+    const float *                     values = derivative->GetBufferPointer();
+    MultiThreaderBase::New()->ParallelizeArray(
+      0,
+      size[2],
+      [&](SizeValueType k) {
+        for (unsigned which = 0; which < 2; ++which)
+        {
+          const std::vector<uint32_t> & offsets = reads[k].Offsets[which];
+          for (size_t n = 0; n < offsets.size(); ++n)
+          {
+            reads[k].Values[which][n][d] = values[k * sliceVoxels + offsets[n]];
+          }
+        }
+      },
+      nullptr);
+  }
+  // Per slice: the sheet's and the air's tensor sums (entries 0-8) and voxel counts (9).
+  std::vector<std::array<double, 10>> sheetSums(size[2], std::array<double, 10>{});
+  std::vector<std::array<double, 10>> airSums(size[2], std::array<double, 10>{});
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[2],
+    [&](SizeValueType k) {
+      for (unsigned which = 0; which < 2; ++which)
+      {
+        std::array<double, 10> & sum = which == 0 ? sheetSums[k] : airSums[k];
+        for (const auto & derivative : reads[k].Values[which])
+        {
+          // The gradient in the physical frame: per physical unit, as the gradient filter
+          // gives it (divided in double, then float), then the image's direction applied.
+          float perUnit[3];
+          for (unsigned d = 0; d < 3; ++d)
+          {
+            perUnit[d] = static_cast<float>(static_cast<double>(derivative[d]) / step[d]);
+          }
+          const CovariantVector<float, 3> local(perUnit);
+          CovariantVector<float, 3>       physical;
+          input->TransformLocalVectorToPhysicalVector(local, physical);
+          for (unsigned r = 0; r < 3; ++r)
+          {
+            for (unsigned c = 0; c < 3; ++c)
+            {
+              sum[3 * r + c] += static_cast<double>(physical[r]) * static_cast<double>(physical[c]);
+            }
+          }
+          sum[9] += 1.0;
+        }
+      }
+      reads[k] = SliceReads{};
+    },
+    nullptr);
   vnl_matrix<double> tensor(3, 3, 0.0), air(3, 3, 0.0);
   double             sheetCount = 0.0, airCount = 0.0;
   for (size_t k = 0; k < size[2]; ++k)
