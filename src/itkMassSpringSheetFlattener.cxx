@@ -702,7 +702,7 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   SheetMesh flat = finish(system.GetPositions(), m_Report.RowBend);
   m_Report.FlippedTriangles = FlatFrame::TurnedOverTriangles(flat);
 
-  // 4. A sheet that came out folded (a long roll whose unrolling stopped at its step
+  // 5. A sheet that came out folded (a long roll whose unrolling stopped at its step
   // limit, pressed onto the plane as it hung) starts again from its rows developed onto
   // the plane, fold-free, and is relaxed from there; the flat mesh with fewer triangles
   // turned over is kept.
