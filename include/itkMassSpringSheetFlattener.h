@@ -222,7 +222,7 @@ struct VirtualUnwrapping_EXPORT MassSpringFlatteningReport
  *    rows (the bend taken out is reported as RowBend);
  * 5. restart (grid meshes that came out with triangles turned over: a long roll whose
  *    unrolling stopped at its step limit lies folded where it was pressed onto the plane):
- *    the sheet's rows are developed onto the plane (FlatFrame::DevelopedRows), relaxed from
+ *    the sheet's rows are developed onto the plane (SheetMesh::ComputeGridLayout), relaxed from
  *    there on both levels and straightened; the result replaces the first when fewer of
  *    its triangles are turned over (FlippedBeforeRestart, RestartKept).
  * The flat mesh (same points, same triangles, z = 0) is expressed in the plane: x along

@@ -708,10 +708,9 @@ MassSpringSheetFlattener::Flatten(const SheetMesh & surface)
   // turned over is kept.
   if (p.RestartFromDevelopedRows != 0 && m_Report.FlippedTriangles > 0 && simulated.IsGridStructured())
   {
-    const std::vector<double> developed = FlatFrame::DevelopedRows(simulated);
-    MassSpringSystem          restart;
+    MassSpringSystem restart;
     BuildSystem(simulated, p, restart);
-    restart.SetPositions(developed);
+    restart.SetPositions(simulated.ComputeGridLayout().Points);
     m_Report.Phases.push_back(RunRelaxation(restart, SheetFlatteningPhaseEnum::Relax, p, m_Callback));
     m_Report.SpringEvaluations += restart.GetNumberOfForceEvaluations() * restart.GetNumberOfSprings();
     double          bend = 0.0;

@@ -16,12 +16,15 @@
  *
  *=========================================================================*/
 #include "itkSheetMesh.h"
-#include "vuFlatFrame.h"
+
+#include "itk_eigen.h"
+#include ITK_EIGEN(Dense)
 
 #include "itkMacro.h"
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace itk {
 void
@@ -181,8 +184,93 @@ SheetMesh::ComputeGridLayout() const
   {
     itkGenericExceptionMacro(<< "SheetMesh::ComputeGridLayout: the mesh has no grid");
   }
+  // Each row straight along its own arc length, each next row placed beside it by the
+  // median, over the columns the two rows share, of the 3D step between them split into its
+  // part along the row's tangent (a skewed grid's shear) and its part across it.
+  const size_t         rows = static_cast<size_t>(GridRows), columns = static_cast<size_t>(GridColumns);
+  std::vector<int64_t> at(rows * columns, -1);
+  for (size_t i = 0; i < GetNumberOfPoints(); ++i)
+  {
+    at[static_cast<size_t>(GridIndex[2 * i]) * columns + static_cast<size_t>(GridIndex[2 * i + 1])] =
+      static_cast<int64_t>(i);
+  }
+  using Vec3 = Eigen::Vector3d;
+  auto point = [this](int64_t i) { return Vec3(Points[3 * i], Points[3 * i + 1], Points[3 * i + 2]); };
+  // Each row's arc length at its columns (NaN where the grid has no point).
+  std::vector<double> arc(rows * columns, std::numeric_limits<double>::quiet_NaN());
+  for (size_t r = 0; r < rows; ++r)
+  {
+    double  u = 0.0;
+    int64_t previous = -1;
+    for (size_t c = 0; c < columns; ++c)
+    {
+      const int64_t i = at[r * columns + c];
+      if (i < 0)
+      {
+        continue;
+      }
+      if (previous >= 0)
+      {
+        u += (point(i) - point(previous)).norm();
+      }
+      arc[r * columns + c] = u;
+      previous = i;
+    }
+  }
+  auto median = [](std::vector<double> & v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  // Row r's offset along x and its place along y.
+  std::vector<double> shift(rows, 0.0), place(rows, 0.0);
+  double              lastStep = 0.0;
+  std::vector<double> alongShifts, acrossSteps;
+  for (size_t r = 0; r + 1 < rows; ++r)
+  {
+    alongShifts.clear();
+    acrossSteps.clear();
+    for (size_t c = 0; c < columns; ++c)
+    {
+      const int64_t here = at[r * columns + c], next = at[(r + 1) * columns + c];
+      if (here < 0 || next < 0)
+      {
+        continue;
+      }
+      // The row's tangent at the column, from its neighbours in the row.
+      const int64_t before = c > 0 ? at[r * columns + c - 1] : -1;
+      const int64_t after = c + 1 < columns ? at[r * columns + c + 1] : -1;
+      if (before < 0 && after < 0)
+      {
+        continue;
+      }
+      const Vec3   tangent = (point(after >= 0 ? after : here) - point(before >= 0 ? before : here)).normalized();
+      const Vec3   step = point(next) - point(here);
+      const double along = step.dot(tangent);
+      alongShifts.push_back(shift[r] + arc[r * columns + c] + along - arc[(r + 1) * columns + c]);
+      acrossSteps.push_back(std::sqrt(std::max(0.0, step.squaredNorm() - along * along)));
+    }
+    if (!alongShifts.empty())
+    {
+      shift[r + 1] = median(alongShifts);
+      lastStep = median(acrossSteps);
+    }
+    else
+    {
+      shift[r + 1] = shift[r];
+    }
+    place[r + 1] = place[r] + lastStep;
+  }
   SheetMesh layout = *this;
-  layout.Points = FlatFrame::DevelopedRows(*this);
+  for (size_t k = 0; k < at.size(); ++k)
+  {
+    if (at[k] >= 0)
+    {
+      const size_t i = static_cast<size_t>(at[k]);
+      layout.Points[3 * i] = shift[k / columns] + arc[k];
+      layout.Points[3 * i + 1] = place[k / columns];
+      layout.Points[3 * i + 2] = 0.0;
+    }
+  }
   // As the flattener lays a sheet: triangles counter-clockwise seen from +z (the side the
   // 3D triangles' normals face), so a texture over the layout reads as over the flat mesh.
   double signedArea = 0.0;

@@ -50,17 +50,6 @@ ToPlane(const std::vector<double> & x,
         const Eigen::Vector3d &     u,
         const Eigen::Vector3d &     v);
 
-/** A grid mesh developed onto the plane row by row, a fold-free start for a sheet whose
- * physical unrolling did not come out flat: each row (a slice across the roll axis) laid
- * straight along its own arc length, and each next row placed beside it by the median,
- * over the columns the two rows share, of the 3D step between them split into its part
- * along the row's tangent (which carries a skewed grid's shear) and its part across it.
- * Exact for a sheet bent about one axis; the strain of any other sheet is what the
- * relaxation that follows takes up. Positions (x, y, z = 0 per point); empty for a mesh
- * without a grid. */
-std::vector<double>
-DevelopedRows(const SheetMesh & mesh);
-
 /** Lays a flat grid mesh's rows straight (z = 0, before Normalise): a sheet rolled or
  * folded about an axis develops into a strip whose rows (the slices across that axis) are
  * straight lines, but a long strip keeps a slow bend in its plane that its springs barely
