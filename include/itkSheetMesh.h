@@ -86,8 +86,8 @@ struct VirtualUnwrapping_EXPORT SheetMesh
 
   /** A grid mesh laid out on its grid, a first flat guess before any simulation: each row
    * straight along its own arc length, each next row placed beside it by the median step
-   * between the two rows (its part along the row's tangent and across it), as the
-   * flattener's restart lays a sheet (SheetMesh::ComputeGridLayout). Exact for sheets bent
+   * between the two rows (its part along the row's tangent and across it; a skewed grid
+   * keeps its shear); MassSpringSheetFlattener restarts a folded sheet from it. Exact for sheets bent
    * about the roll axis only (a cylinder, a spiral of constant width); used to map a
    * texture onto a sheet not yet flattened. Same points and triangles. Throws for meshes
    * without a grid. Rows are numbered downwards instead where that makes the triangles

@@ -16,6 +16,7 @@
  *
  *=========================================================================*/
 #include "itkSheetMesh.h"
+#include "vuMedian.h"
 
 #include "itk_eigen.h"
 #include ITK_EIGEN(Dense)
@@ -217,10 +218,6 @@ SheetMesh::ComputeGridLayout() const
       previous = i;
     }
   }
-  auto median = [](std::vector<double> & v) {
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
   // Row r's offset along x and its place along y.
   std::vector<double> shift(rows, 0.0), place(rows, 0.0);
   double              lastStep = 0.0;
@@ -251,8 +248,8 @@ SheetMesh::ComputeGridLayout() const
     }
     if (!alongShifts.empty())
     {
-      shift[r + 1] = median(alongShifts);
-      lastStep = median(acrossSteps);
+      shift[r + 1] = RollTracing::Median(alongShifts);
+      lastStep = RollTracing::Median(acrossSteps);
     }
     else
     {

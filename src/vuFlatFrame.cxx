@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "vuFlatFrame.h"
 #include "vuCoarseGrid.h"
+#include "vuMedian.h"
 
 #include <algorithm>
 #include <cmath>
@@ -225,9 +226,7 @@ StraightenRows(SheetMesh & flat)
     const double step = std::max(arc[c] - arc[c - 1], 1e-12);
     turns[c - 1] = turn / step * 0.5 * width;
   }
-  const double fastest = *std::max_element(turns.begin(), turns.end());
-  std::nth_element(turns.begin(), turns.begin() + turns.size() / 2, turns.end());
-  if (turns[turns.size() / 2] > 0.1 || fastest > 0.5)
+  if (RollTracing::Median(turns) > 0.1 || *std::max_element(turns.begin(), turns.end()) > 0.5)
   {
     return 0.0;
   }

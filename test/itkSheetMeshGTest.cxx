@@ -21,8 +21,11 @@
 
 #include "gtest/gtest.h"
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <limits>
+#include <random>
 
 namespace {
 itk::SheetMesh
@@ -187,4 +190,56 @@ TEST(SheetMesh, GridLayoutOfACylinderIsIsometric)
   itk::SheetMesh noGrid = mesh;
   noGrid.GridIndex.clear();
   EXPECT_THROW(noGrid.ComputeGridLayout(), itk::ExceptionObject);
+}
+
+// A skewed grid (each row's columns start further along the arc than the row before, as a
+// trace of a skewed roll gives them) on a cylinder: its layout keeps the shear, so that every
+// edge, the ones across the rows included, has its length on the cylinder. The radius and
+// the skew are drawn at run time; laid with the rows one above the other, the edges across
+// the rows would be wrong by a seventh or more.
+TEST(SheetMesh, GridLayoutOfASkewedGridKeepsItsShear)
+{
+  std::random_device                     device;
+  const unsigned int                     seed = device();
+  std::mt19937                           random(seed);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const double                           radius = 5.0 + 10.0 * uniform(random);
+  const double                           rowStep = 0.5 + uniform(random);
+  const double                           skew = (0.8 + 0.6 * uniform(random)) * rowStep / radius; // radians a row
+  std::cout << "seed " << seed << ": radius " << radius << ", row step " << rowStep << ", skew " << skew << std::endl;
+  itk::SheetMesh mesh;
+  mesh.GridRows = 12;
+  mesh.GridColumns = 60;
+  for (int r = 0; r < mesh.GridRows; ++r)
+  {
+    for (int c = 0; c < mesh.GridColumns; ++c)
+    {
+      const double t = 0.05 * c + skew * r;
+      mesh.Points.insert(mesh.Points.end(), { radius * std::cos(t), radius * std::sin(t), rowStep * r });
+      mesh.GridIndex.insert(mesh.GridIndex.end(), { r, c });
+      if (r > 0 && c > 0)
+      {
+        const uint32_t a = (r - 1) * mesh.GridColumns + c - 1, b = a + 1, d = r * mesh.GridColumns + c - 1, e = d + 1;
+        mesh.Triangles.insert(mesh.Triangles.end(), { a, b, e, a, e, d });
+      }
+    }
+  }
+  const itk::SheetMesh        layout = mesh.ComputeGridLayout();
+  const std::vector<uint32_t> edges = mesh.ComputeEdges();
+  double                      worst = 0.0;
+  for (size_t k = 0; k < edges.size(); k += 2)
+  {
+    auto length = [&](const itk::SheetMesh & m) {
+      double sum = 0.0;
+      for (unsigned d = 0; d < 3; ++d)
+      {
+        const double e = m.Points[3 * edges[k] + d] - m.Points[3 * edges[k + 1] + d];
+        sum += e * e;
+      }
+      return std::sqrt(sum);
+    };
+    worst = std::max(worst, std::abs(length(layout) / length(mesh) - 1.0));
+  }
+  std::cout << "largest edge strain of the layout " << worst << std::endl;
+  EXPECT_LT(worst, 0.01);
 }

@@ -236,6 +236,25 @@ RestoreFWHM(const std::string & value)
   throw UsageError("--restore must be off or the scanner's PSF FWHM in mm (>= 0), not '" + value + "'");
 }
 
+// Where an image with its rows (axis 1) in reverse order lies, as itk::FlipImageFilter
+// about axis 1 (not about the origin) places it: starting where the last row lay, the
+// axis's direction reversed.
+template <typename TImage>
+void
+FlippedRowsGeometry(const TImage *                   image,
+                    typename TImage::PointType &     origin,
+                    typename TImage::DirectionType & direction)
+{
+  const auto &               region = image->GetLargestPossibleRegion();
+  typename TImage::IndexType last = region.GetIndex();
+  last[1] = static_cast<itk::IndexValueType>(region.GetSize(1)) - 1;
+  image->TransformIndexToPhysicalPoint(last, origin);
+  typename TImage::DirectionType reverse;
+  reverse.SetIdentity();
+  reverse[1][1] = -1.0;
+  direction = image->GetDirection() * reverse;
+}
+
 // Flat y grows upwards when the sheet is seen from the side its normals face; image rows
 // grow downwards. Flipping rows shows the sheet as seen from that side, not mirrored.
 template <typename TImage>
@@ -257,21 +276,15 @@ FlipRows(const TImage * image)
     result->DisconnectPipeline();
     return result;
   }
-  // The same image as itk::FlipImageFilter about axis 1 (not about the origin) gives: the
-  // last row first, starting where the last row lay, the axis's direction reversed; rows
-  // copied whole.
+  // The same image as itk::FlipImageFilter gives: the last row first, rows copied whole.
   auto result = TImage::New();
   result->CopyInformation(image);
   result->SetRegions(region);
-  typename TImage::IndexType last = region.GetIndex();
-  last[1] = static_cast<itk::IndexValueType>(region.GetSize(1)) - 1;
-  typename TImage::PointType origin;
-  image->TransformIndexToPhysicalPoint(last, origin);
+  typename TImage::PointType     origin;
+  typename TImage::DirectionType direction;
+  FlippedRowsGeometry(image, origin, direction);
   result->SetOrigin(origin);
-  typename TImage::DirectionType reverse;
-  reverse.SetIdentity();
-  reverse[1][1] = -1.0;
-  result->SetDirection(image->GetDirection() * reverse);
+  result->SetDirection(direction);
   result->Allocate();
   const itk::SizeValueType columns = region.GetSize(0), rows = region.GetSize(1);
   const itk::SizeValueType planes = region.GetNumberOfPixels() / (columns * rows);
@@ -300,17 +313,12 @@ FlipRowsInPlace(TImage * image)
   {
     return FlipRows(image);
   }
-  typename TImage::IndexType last = region.GetIndex();
-  last[1] = static_cast<itk::IndexValueType>(region.GetSize(1)) - 1;
-  typename TImage::PointType origin;
-  image->TransformIndexToPhysicalPoint(last, origin);
-  typename TImage::DirectionType reverse;
-  reverse.SetIdentity();
-  reverse[1][1] = -1.0;
-  const typename TImage::DirectionType direction = image->GetDirection() * reverse;
-  const itk::SizeValueType             columns = region.GetSize(0), rows = region.GetSize(1);
-  const itk::SizeValueType             planes = region.GetNumberOfPixels() / (columns * rows);
-  auto *                               buffer = image->GetBufferPointer();
+  typename TImage::PointType     origin;
+  typename TImage::DirectionType direction;
+  FlippedRowsGeometry(image, origin, direction);
+  const itk::SizeValueType columns = region.GetSize(0), rows = region.GetSize(1);
+  const itk::SizeValueType planes = region.GetNumberOfPixels() / (columns * rows);
+  auto *                   buffer = image->GetBufferPointer();
   for (itk::SizeValueType plane = 0; plane < planes; ++plane)
   {
     for (itk::SizeValueType row = 0; row < rows / 2; ++row)
