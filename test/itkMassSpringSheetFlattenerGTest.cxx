@@ -265,13 +265,12 @@ TEST(MassSpringSheetFlattener, TightInnerCurlOfALongRollDoesNotFoldOver)
 // onto the plane. The roll's size and the step limit are drawn at run time.
 TEST(MassSpringSheetFlattener, AnUnfinishedUnrollIsReportedAndStartsAgainFromItsRows)
 {
-  std::random_device                     device;
-  const unsigned int                     seed = device();
-  std::mt19937                           random(seed);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  const double                           turns = 2.5 + 1.5 * uniform(random);
-  const double                           width = 2.0 + 2.0 * uniform(random);
-  const unsigned int                     steps = 2 + static_cast<unsigned int>(8 * uniform(random));
+  const unsigned seed = std::random_device{}();
+  std::mt19937   random(seed);
+  auto uniform = [&](double low, double high) { return std::uniform_real_distribution<double>(low, high)(random); };
+  const double       turns = uniform(2.5, 4.0);
+  const double       width = uniform(2.0, 4.0);
+  const unsigned int steps = std::uniform_int_distribution<unsigned int>(2, 9)(random);
   std::cout << "seed " << seed << ": " << turns << " turns, width " << width << ", " << steps << " steps a phase"
             << std::endl;
   const itk::SheetMesh          surface = vu::SpiralRollMesh(10.0, 4.0, turns, width, 30.0, nullptr);

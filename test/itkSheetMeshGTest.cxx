@@ -199,13 +199,12 @@ TEST(SheetMesh, GridLayoutOfACylinderIsIsometric)
 // the rows would be wrong by a seventh or more.
 TEST(SheetMesh, GridLayoutOfASkewedGridKeepsItsShear)
 {
-  std::random_device                     device;
-  const unsigned int                     seed = device();
-  std::mt19937                           random(seed);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  const double                           radius = 5.0 + 10.0 * uniform(random);
-  const double                           rowStep = 0.5 + uniform(random);
-  const double                           skew = (0.8 + 0.6 * uniform(random)) * rowStep / radius; // radians a row
+  const unsigned seed = std::random_device{}();
+  std::mt19937   random(seed);
+  auto uniform = [&](double low, double high) { return std::uniform_real_distribution<double>(low, high)(random); };
+  const double radius = uniform(5.0, 15.0);
+  const double rowStep = uniform(0.5, 1.5);
+  const double skew = uniform(0.8, 1.4) * rowStep / radius; // radians a row
   std::cout << "seed " << seed << ": radius " << radius << ", row step " << rowStep << ", skew " << skew << std::endl;
   itk::SheetMesh mesh;
   mesh.GridRows = 12;
