@@ -683,7 +683,22 @@ Extraction::BuildMesh()
   // not in others (a touch's edge along the axis), the mean would lie between the two, in
   // the gap or on the neighbouring turn.
   const double agreement = 0.5 * std::max(m_Report.SheetThickness, voxel);
-  SheetMesh    mesh = BuildSheetGrid(columnsOf, firstGood, lastGood, sz, below, rows, rowSpacing, columns, agreement);
+  RollAxisLine rollAxis{};
+  for (int d = 0; d < 2; ++d)
+  {
+    rollAxis.Centre[d] = m_Report.AxisCentre[d] + rollCentreOffset[d];
+    rollAxis.Slope[d] = m_Report.AxisSlope[d];
+  }
+  SheetMesh mesh = BuildSheetGrid(columnsOf,
+                                  firstGood,
+                                  lastGood,
+                                  sz,
+                                  below,
+                                  rows,
+                                  rowSpacing,
+                                  columns,
+                                  agreement,
+                                  method == SheetSurfaceMethodEnum::Roll ? &rollAxis : nullptr);
   if (method == SheetSurfaceMethodEnum::Roll)
   {
     OrientNormalsToAxis(mesh, m_Report.AxisCentre, m_Report.AxisSlope);

@@ -17,6 +17,9 @@
  *=========================================================================*/
 #include "vuSheetGrid.h"
 
+#include "itkMath.h"
+#include "vuMedian.h"
+
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -44,6 +47,125 @@ WeightedMedian(std::vector<std::pair<double, double>> & values)
     }
   }
   return values.back().first;
+}
+
+// A column's radius and angle about a roll's axis along the slices of an edge row's
+// window: their trends, and the agreeing slices' range (RollEdgeRowFit).
+struct RollColumnTrend
+{
+  double Radius;      // at Slice
+  double Angle;       // at Slice
+  double RadiusSlope; // per slice
+  double Slice;       // the row's slice, clamped to the agreeing slices
+};
+
+// Column c of an edge row (one whose window the traced slices cut) about a roll's axis
+// (centre(k) in slice k): the radius and the angle fitted along the window's slices,
+// robustly (Theil and Sen: the weighted median of the slopes between every two slices,
+// then the weighted median offset), taken at slice `at` or, past the slices that agree
+// with both trends within `agreement` (across the sheet: the radius; along it: the angle
+// times the radius), at the nearest of them. A column drifts along the sheet from slice to
+// slice (a skewed roll's columns are not square to the axis, by a voxel a slice and more):
+// a straight line in x and y carries the row off the turn along its chord, and agreement
+// measured in the plane leaves all but two or three slices out for the drift alone. Where
+// the traces' ends slide along the sheet at its edge, their drift is no trend: carried past
+// them it moves the row onto the neighbouring turn. None where no slice agrees.
+std::optional<RollColumnTrend>
+RollEdgeRowFit(const std::vector<std::pair<long, double>> & window,
+               const std::vector<Polyline> &                columnsOf,
+               size_t                                       c,
+               double                                       agreement,
+               double                                       at,
+               const RollAxisLine &                         axis,
+               double                                       sz)
+{
+  auto centre = [&](double slice, double xy[2]) {
+    for (int d = 0; d < 2; ++d)
+    {
+      xy[d] = axis.Centre[d] + axis.Slope[d] * slice * sz;
+    }
+  };
+  struct Sample
+  {
+    double Slice, Weight, Radius, Angle;
+  };
+  std::vector<Sample> samples;
+  samples.reserve(window.size());
+  double reference = 0.0;
+  for (const auto & [k, weight] : window)
+  {
+    const double * p = &columnsOf[static_cast<size_t>(k)][2 * c];
+    double         o[2];
+    centre(static_cast<double>(k), o);
+    const double x = p[0] - o[0], y = p[1] - o[1];
+    double       angle = std::atan2(y, x);
+    if (samples.empty())
+    {
+      reference = angle;
+    }
+    // Unwrapped about the first slice's angle.
+    angle = reference + std::remainder(angle - reference, 2.0 * itk::Math::pi);
+    samples.push_back({ static_cast<double>(k), weight, std::hypot(x, y), angle });
+  }
+  if (samples.empty())
+  {
+    return std::nullopt;
+  }
+  // The trends of the radius and of the angle along the slices, robustly: the weighted
+  // median of the slopes between every two slices (Theil and Sen), and the weighted median
+  // offset from it. A slice agrees when it lies within `agreement` of both, across the
+  // sheet (radius) and along it (angle times radius): a slice on the neighbouring turn, or
+  // whose column slid along the turn unlike the others' (the traces' ends at the sheet's
+  // edge), is left out.
+  std::vector<std::pair<double, double>> values;
+  auto                                   trend = [&](auto value, double & slope, double & offset) {
+    values.clear();
+    for (size_t i = 0; i < samples.size(); ++i)
+    {
+      for (size_t j = i + 1; j < samples.size(); ++j)
+      {
+        values.emplace_back((value(samples[j]) - value(samples[i])) / (samples[j].Slice - samples[i].Slice),
+                            samples[i].Weight * samples[j].Weight);
+      }
+    }
+    slope = values.empty() ? 0.0 : WeightedMedian(values);
+    values.clear();
+    for (const auto & sample : samples)
+    {
+      values.emplace_back(value(sample) - slope * sample.Slice, sample.Weight);
+    }
+    offset = WeightedMedian(values);
+  };
+  double radiusTrend[2], angleTrend[2];
+  trend([](const Sample & sample) { return sample.Radius; }, radiusTrend[0], radiusTrend[1]);
+  trend([](const Sample & sample) { return sample.Angle; }, angleTrend[0], angleTrend[1]);
+  auto agrees = [&](const Sample & sample) {
+    const double radius = radiusTrend[1] + radiusTrend[0] * sample.Slice;
+    return std::abs(sample.Radius - radius) <= agreement &&
+           std::abs(sample.Angle - angleTrend[1] - angleTrend[0] * sample.Slice) * std::max(radius, 0.0) <= agreement;
+  };
+  // The trends, taken at `at` inside the agreeing slices and at the nearest of them past
+  // them: the sheet runs along the axis, and a trend carried past the traces (whose ends
+  // slide at the sheet's edge) only moves the row off the sheet.
+  bool   any = false;
+  double nearest = 0.0, farthest = 0.0;
+  for (const auto & sample : samples)
+  {
+    if (agrees(sample))
+    {
+      nearest = any ? std::min(nearest, sample.Slice) : sample.Slice;
+      farthest = any ? std::max(farthest, sample.Slice) : sample.Slice;
+      any = true;
+    }
+  }
+  if (!any)
+  {
+    return std::nullopt;
+  }
+  const double to = std::clamp(at, nearest, farthest);
+  return RollColumnTrend{
+    radiusTrend[1] + radiusTrend[0] * to, angleTrend[1] + angleTrend[0] * to, radiusTrend[0], to
+  };
 }
 
 // Point of column c of a grid row from the slices of its window (slice, weight): the
@@ -132,7 +254,8 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
                size_t                        rows,
                double                        rowSpacing,
                size_t                        columns,
-               double                        agreement)
+               double                        agreement,
+               const RollAxisLine *          rollAxis)
 {
   const double kernel = std::max(rowSpacing, sz);
   SheetMesh    mesh;
@@ -159,11 +282,41 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
         window.emplace_back(k, weight);
       }
     }
+    // An edge row of a roll: each column's trends about the axis; past the traced slices
+    // the radius follows the row's median radial slope (a roll's taper, the same all
+    // round), not its own column's (which sliding traces' ends bend).
+    std::vector<std::optional<RollColumnTrend>> trends;
+    double                                      radialSlope = 0.0;
+    if (cut && rollAxis != nullptr)
+    {
+      trends.resize(columns);
+      std::vector<double> slopes;
+      for (size_t c = 0; c < columns; ++c)
+      {
+        trends[c] = RollEdgeRowFit(window, columnsOf, c, agreement, z / sz, *rollAxis, sz);
+        if (trends[c])
+        {
+          slopes.push_back(trends[c]->RadiusSlope);
+        }
+      }
+      radialSlope = slopes.empty() ? 0.0 : RollTracing::Median(slopes);
+    }
     for (size_t c = 0; c < columns; ++c)
     {
       const size_t p = r * columns + c;
       double       point[2];
-      RobustRowPoint(window, columnsOf, c, agreement, cut ? std::optional<double>(z / sz) : std::nullopt, point);
+      if (!trends.empty() && trends[c])
+      {
+        const RollColumnTrend & trend = *trends[c];
+        const double past = z / sz - std::clamp(z / sz, static_cast<double>(firstGood), static_cast<double>(lastGood));
+        const double radius = std::max(0.0, trend.Radius + radialSlope * past);
+        point[0] = rollAxis->Centre[0] + rollAxis->Slope[0] * z + radius * std::cos(trend.Angle);
+        point[1] = rollAxis->Centre[1] + rollAxis->Slope[1] * z + radius * std::sin(trend.Angle);
+      }
+      else
+      {
+        RobustRowPoint(window, columnsOf, c, agreement, cut ? std::optional<double>(z / sz) : std::nullopt, point);
+      }
       mesh.Points[3 * p] = point[0];
       mesh.Points[3 * p + 1] = point[1];
       mesh.Points[3 * p + 2] = z;

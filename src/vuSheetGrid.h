@@ -26,6 +26,14 @@
 
 namespace itk {
 namespace SheetTracing {
+/** A roll's axis in the frame of a sheet's slices: its centre at height z (mm, slice k at
+ * k * sz) is Centre + Slope * z. */
+struct RollAxisLine
+{
+  double Centre[2];
+  double Slope[2];
+};
+
 /** The grid mesh of a sheet from its slices' columns (`columnsOf[k]`: `columns` points of
  * slice k, for every slice from firstGood to lastGood). Row r lies at z = firstGood * sz -
  * below + r * rowSpacing: per column, a straight line along the slices fitted, with
@@ -33,6 +41,10 @@ namespace SheetTracing {
  * the traced range cuts that window), leaving out the slices whose point lies farther than
  * `agreement` from the row's weighted median point, and taken at z: the weighted mean
  * inside the range, the sheet's trend at its edges (rows past the traced slices included).
+ * With `rollAxis` (a roll), the rows at the edges take each column's radius and angle about
+ * the axis instead of x and y, robustly fitted along the slices, leaving out the slices
+ * that disagree across the sheet or along it; the angle is not carried past the traced
+ * slices, the radius by the row's median slope (a taper).
  * Triangles with normals dP/dw x dP/ds. */
 SheetMesh
 BuildSheetGrid(const std::vector<Polyline> & columnsOf,
@@ -43,7 +55,8 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
                size_t                        rows,
                double                        rowSpacing,
                size_t                        columns,
-               double                        agreement);
+               double                        agreement,
+               const RollAxisLine *          rollAxis = nullptr);
 
 /** The point a fraction t of the way from p0 to p1 along a roll's turn: angle (the
  * shorter way round) and radius about the axis, whose centres in the two points' slices are
