@@ -304,11 +304,15 @@ FirstDisagreement(const Tracer::Trace & a, const Tracer::Trace & b, double pitch
 }
 
 // A trace that stopped short of its prior's ends (a touch it could not pass, a faint
-// stretch, a streak) would lose the rest of the roll for every slice after it. It is traced
-// again from the prior's stretch beyond each end it stopped at more than half a turn short
-// of; a second piece that agrees with the prior is joined to it, the stretch between the
-// two (at most a turn) on the prior's curve, offset linearly from one piece's end to the
-// other's.
+// stretch, a streak, the part of a turn outside the field of view) would lose the rest of
+// the roll for every slice after it. It is traced again from the prior's stretch beyond
+// each end it stopped at more than half a turn short of; a second piece that agrees with the
+// prior is joined to it, the stretch between the two (at most a turn) on the prior's curve,
+// offset linearly from one piece's end to the other's. Again from the joined trace's end,
+// up to MaximumResumptions times: a roll cut by the field of view leaves it once a turn, and
+// a piece resumed past one cut stops at the next.
+constexpr int MaximumResumptions = 4;
+
 void
 ResumeBeyondStops(Tracer::Trace &        trace,
                   const Tracer::Trace &  prior,
@@ -318,33 +322,33 @@ ResumeBeyondStops(Tracer::Trace &        trace,
 {
   const long   half = tracer.Frame().Rays / 2;
   const double pitch = tracer.Pitch();
-  for (int end : { 0, 1 })
-  {
+  // One resumption beyond the trace's end `end`; true when the trace grew.
+  auto resume = [&](int end) {
     if (trace.Empty())
     {
-      return;
+      return false;
     }
     const long from = end == 0 ? prior.First : trace.Last() + half / 4;
     const long to = end == 0 ? trace.First - half / 4 : prior.Last();
     if ((end == 0 ? trace.First - prior.First : prior.Last() - trace.Last()) <= half || to - from < half / 2)
     {
-      continue;
+      return false;
     }
     Tracer::Trace piece = tracer.TraceNear(crossings, slice, prior, from, to);
     if (piece.Empty() || FirstDisagreement(prior, piece, pitch) >= 0 || FirstDisagreement(trace, piece, pitch) >= 0)
     {
-      continue;
+      return false;
     }
     const Tracer::Trace & inner = end == 0 ? piece : trace;
     const Tracer::Trace & outer = end == 0 ? trace : piece;
     if (piece.First <= trace.First && piece.Last() >= trace.Last())
     {
       trace = std::move(piece); // passed the hard place from the other side
-      continue;
+      return true;
     }
     if (outer.Last() <= inner.Last() || outer.First <= inner.First)
     {
-      continue; // the trace holds the piece
+      return false; // the trace holds the piece
     }
     Tracer::Trace joined;
     joined.First = inner.First;
@@ -354,7 +358,7 @@ ResumeBeyondStops(Tracer::Trace &        trace,
     if (gapFrom <= gapTo &&
         (!(prior.Covers(gapFrom - 1) && prior.Covers(gapTo + 1)) || gapTo - gapFrom >= tracer.Frame().Rays))
     {
-      continue; // a trace started away from the prior, or more than a turn to bridge
+      return false; // a trace started away from the prior, or more than a turn to bridge
     }
     const double before = gapFrom <= gapTo ? inner.At(inner.Last()) - prior.At(inner.Last()) : 0.0;
     const double after = gapFrom <= gapTo ? outer.At(outer.First) - prior.At(outer.First) : 0.0;
@@ -378,6 +382,12 @@ ResumeBeyondStops(Tracer::Trace &        trace,
       }
     }
     trace = std::move(joined);
+    return true;
+  };
+  for (int end : { 0, 1 })
+  {
+    for (int resumption = 0; resumption < MaximumResumptions && resume(end); ++resumption)
+    {}
   }
 }
 // A seed slice's tracer, crossings and trace.
