@@ -50,13 +50,12 @@ WeightedMedian(std::vector<std::pair<double, double>> & values)
 }
 
 // A column's radius and angle about a roll's axis along the slices of an edge row's
-// window: their trends, and the agreeing slices' range (RollEdgeRowFit).
+// window: their trends, taken at the row or the nearest agreeing slice (RollEdgeRowFit).
 struct RollColumnTrend
 {
-  double Radius;      // at Slice
-  double Angle;       // at Slice
+  double Radius;      // at the row, or the nearest agreeing slice past them
+  double Angle;       // likewise
   double RadiusSlope; // per slice
-  double Slice;       // the row's slice, clamped to the agreeing slices
 };
 
 // Column c of an edge row (one whose window the traced slices cut) about a roll's axis
@@ -163,9 +162,7 @@ RollEdgeRowFit(const std::vector<std::pair<long, double>> & window,
     return std::nullopt;
   }
   const double to = std::clamp(at, nearest, farthest);
-  return RollColumnTrend{
-    radiusTrend[1] + radiusTrend[0] * to, angleTrend[1] + angleTrend[0] * to, radiusTrend[0], to
-  };
+  return RollColumnTrend{ radiusTrend[1] + radiusTrend[0] * to, angleTrend[1] + angleTrend[0] * to, radiusTrend[0] };
 }
 
 // Point of column c of a grid row from the slices of its window (slice, weight): the
@@ -301,6 +298,7 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
       }
       radialSlope = slopes.empty() ? 0.0 : RollTracing::Median(slopes);
     }
+    const double past = z / sz - std::clamp(z / sz, static_cast<double>(firstGood), static_cast<double>(lastGood));
     for (size_t c = 0; c < columns; ++c)
     {
       const size_t p = r * columns + c;
@@ -308,8 +306,7 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
       if (!trends.empty() && trends[c])
       {
         const RollColumnTrend & trend = *trends[c];
-        const double past = z / sz - std::clamp(z / sz, static_cast<double>(firstGood), static_cast<double>(lastGood));
-        const double radius = std::max(0.0, trend.Radius + radialSlope * past);
+        const double            radius = std::max(0.0, trend.Radius + radialSlope * past);
         point[0] = rollAxis->Centre[0] + rollAxis->Slope[0] * z + radius * std::cos(trend.Angle);
         point[1] = rollAxis->Centre[1] + rollAxis->Slope[1] * z + radius * std::sin(trend.Angle);
       }
