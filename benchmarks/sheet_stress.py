@@ -1279,7 +1279,7 @@ MEASURED_KEYS = ["tilt_reach", "gap_min", "gap_median", "snr_measured", "sheet_l
 FIGURE_KEYS = ["success", "legible", "legible_text", "mesh_error_mean", "mesh_error_p95", "mesh_error_max",
                "mesh_error_mean_all", "vertices_outside", "jumps",
                "jumps_at_ends",
-               "coverage", "cer", "cer_text", "ocr_variant", "ocr_text", "ocr_text_region", "ocr_box", "vertices",
+               "coverage", "cer", "cer_text", "cer_ceiling", "legible_ceiling", "ceiling_filter", "ocr_variant", "ocr_text", "ocr_text_region", "ocr_box", "vertices",
                "triangles", "median_edge", "turns_touched"]
 TOOL_KEYS = ["tool_exit", "tool_error", "crash", "score_error", "method", "threshold", "grid", "sheet_thickness_mm",
              "flipped_triangles", "edge_strain_p95",
@@ -1379,7 +1379,69 @@ def text_region(truth, scan_dir, projected, texture_png, flat_obj):
     return box if box[2] - box[0] > 8 and box[3] - box[1] > 8 else None
 
 
-def score_scan(scan_dir, keep="failures", overlay=True):
+CEILING_SIGMAS = (1.0, 2.0, 3.0, 4.0)  # Gaussian smoothing of the ideal texture, pixels (half a voxel)
+CEILING_BACKGROUND = (0.0, 20.0)      # and its slow background taken out (Gaussian, pixels; 0: none)
+
+
+def ink_ceiling(scan_dir, truth, volume=None):
+    """How legible the scan itself is: the volume sampled on the TRUE mid-surface, over the
+    ink layer's true depth (three samples across it, along the true normal), at the ink
+    image's pixels (half a voxel); then smoothed (CEILING_SIGMAS) with or without its slow
+    background taken out (CEILING_BACKGROUND), shown with the median as white and the 99.5th
+    percentile as black (dense ink dark on a white page), read by tesseract. cer_ceiling is
+    the best of these; a texture found by any method that samples the scan cannot be expected
+    to read better than this, so a scan with cer_ceiling > 5 % is illegible in the scan, not
+    by the tool's fault. ceiling.png keeps the best image."""
+    from PIL import Image
+    p, ink = truth["parameters"], truth["ink"]
+    if volume is None:
+        volume = read_volume(scan_dir, truth)
+    roll = Roll(p)
+    roll.center = np.array(truth["volume"]["roll_center_voxels"])
+    with Image.open(os.path.join(scan_dir, "truth_ink.png")) as im:
+        width, height = im.size
+    pad = 16
+    s = ink["ink_s_origin"] + np.arange(-pad, width + pad) * TEXTURE_PIXEL
+    w = ink["ink_w_top"] - np.arange(-pad, height + pad) * TEXTURE_PIXEL
+    ss_, ww = np.meshgrid(s, w)
+    phi, z = roll.arc_to_phi(ss_.ravel()), ww.ravel()
+    pt = roll.point(phi, z)
+    eps = 1e-3
+    dphi = (roll.point(phi + eps, z) - roll.point(phi - eps, z)) / (2 * eps)
+    dz = (roll.point(phi, z + 0.05) - roll.point(phi, z - 0.05)) / 0.1
+    normal = np.cross(dphi, dz)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    radial = pt.copy()
+    radial[:, 2] = 0
+    normal *= np.sign(np.sum(normal * radial, axis=1))[:, None]
+    t = p["thickness"] * roll.thickness_factor(z)[:, None]
+    sign = 1.0 if p["ink_face"] == "outer" else -1.0
+    total = np.zeros(len(z))
+    for f in (-1.0, 0.0, 1.0):  # the ink layer: the outer third of the thickness, t / 3 deep
+        q = roll.to_volume(pt + (sign * t / 3.0 + f * t / 6.0) * normal)
+        total += ndimage.map_coordinates(volume, [q[:, 2], q[:, 1], q[:, 0]], order=1, mode="nearest")
+    ideal = (total / 3.0).reshape(ss_.shape)
+    text = normalise_text(truth["text"])
+    best = (float("inf"), "", None)
+    for sigma in CEILING_SIGMAS:
+        smooth = ndimage.gaussian_filter(ideal, sigma)
+        for background in CEILING_BACKGROUND:
+            img = smooth - ndimage.gaussian_filter(smooth, background) if background else smooth
+            white, black = np.median(img), np.percentile(img, 99.5)
+            grey = 1.0 - np.clip((img - white) / max(black - white, 1e-9), 0.0, 1.0)
+            image = Image.fromarray((255 * grey).astype(np.uint8))
+            cer = levenshtein(_tesseract(image, scan_dir), text) / max(1, len(text))
+            if cer < best[0]:
+                best = (cer, f"sigma {sigma:g} px" + (f", background {background:g} px" if background else ""), image)
+            if cer <= 0.01:
+                break
+        if best[0] <= 0.01:
+            break
+    best[2].save(os.path.join(scan_dir, "ceiling.png"))
+    return {"cer_ceiling": best[0], "ceiling_filter": best[1], "legible_ceiling": bool(best[0] <= LEGIBLE_CER)}
+
+
+def score_scan(scan_dir, keep="failures", overlay=True, ceiling=False):
     """Score the tool's outputs in scan_dir against the truth; returns the CSV row."""
     with open(os.path.join(scan_dir, "truth.json")) as f:
         truth = json.load(f)
@@ -1438,6 +1500,8 @@ def score_scan(scan_dir, keep="failures", overlay=True):
                                   and figures.get("coverage", 0.0) >= SUCCESS_COVERAGE)
         figures["legible"] = bool(figures.get("cer", float("inf")) <= LEGIBLE_CER)
         figures["legible_text"] = bool(figures.get("cer_text", float("inf")) <= LEGIBLE_CER)
+        if ceiling and os.path.exists(os.path.join(scan_dir, truth["volume"]["input"])):
+            figures.update(ink_ceiling(scan_dir, truth))
         if overlay and not figures["success"] and os.path.exists(os.path.join(scan_dir, truth["volume"]["input"])):
             volume = read_volume(scan_dir, truth)
             title = (f"seed {p['seed']}: turns {p['turns']:.1f}, gap {p['gap']:.2f}, t {p['thickness']:.2f}, "
@@ -1478,9 +1542,34 @@ def process_scan(seed, out_root, region="accept", small=False, tool="build/bin/v
     p = draw_parameters(seed, region, small, overrides)
     truth = generate(p, scan_dir, verbose=False)
     run_tool(tool, scan_dir, truth, timeout, stage)
-    row = score_scan(scan_dir, keep)
+    row = score_scan(scan_dir, keep, ceiling=stage == "unwrap")
     row.update(extra or {})
     return row
+
+
+def ceiling_scan(seed, out_root, region="accept", small=False, keep="none", overrides=None):
+    """Generate one scan and read its ink from the true surface (ink_ceiling): no tool run."""
+    scan_dir = os.path.join(out_root, f"scan-{seed}")
+    if os.path.isdir(scan_dir):
+        shutil.rmtree(scan_dir)
+    truth = generate(draw_parameters(seed, region, small, overrides), scan_dir, verbose=False)
+    row = truth_row(truth)
+    try:
+        row.update(ink_ceiling(scan_dir, truth))
+    except Exception as e:  # a scoring failure is reported, not hidden
+        row["score_error"] = f"{type(e).__name__}: {e}"
+    if keep != "all":
+        for name in ("volume.mha", "tiff", "dicom"):
+            target = os.path.join(scan_dir, name)
+            if os.path.isdir(target):
+                shutil.rmtree(target)
+            elif os.path.exists(target):
+                os.remove(target)
+    return row
+
+
+def _ceiling_scan_star(kwargs):
+    return ceiling_scan(**kwargs)
 
 
 def _rescore_star(kwargs):
@@ -1492,7 +1581,7 @@ def _rescore_star(kwargs):
         if os.path.isdir(out):
             shutil.rmtree(out)
         run_tool(kwargs["tool"], kwargs["scan_dir"], truth, 1800, kwargs["rerun"])
-    return score_scan(kwargs["scan_dir"], keep="all")
+    return score_scan(kwargs["scan_dir"], keep="all", ceiling=kwargs["rerun"] != "mesh")
 
 
 def _process_scan_star(kwargs):
@@ -1562,6 +1651,8 @@ FACTORS = [
     ("FOV cut", "fov_cut_voxels", [("none", lambda x: _num(x) == 0), ("cut", lambda x: _num(x) > 0)]),
     ("artefact type", "artefact", None),
     ("blur sigma (voxels)", "blur", _bins([(0.4, 0.67), (0.67, 0.94), (0.94, 1.21)])),
+    ("ink contrast (of the sheet's)", "ink_contrast", _bins([(0.3, 0.6), (0.6, 0.9), (0.9, 1.21)])),
+    ("letter height (voxels)", "letter_height", _bins([(6, 11), (11, 15.5), (15.5, 20.01)])),
     ("voxel coarseness", "coarse_voxels", [("coarse (t <= 1.5)", lambda x: str(x) == "True"),
                                             ("fine (t > 1.5)", lambda x: str(x) == "False")]),
     ("file format", "format", None),
@@ -1587,12 +1678,26 @@ def summary_table(rows):
         cer = _median([_num(r.get("cer")) for r in sel])
         cer_text = _median([_num(r.get("cer_text")) for r in sel])
         f = lambda x, d=2: "-" if not math.isfinite(x) else f"{x:.{d}f}"
+        in_scan = [r for r in sel if str(r.get("legible_ceiling")) in ("True", "False")]
+        ceiling = "-" if not in_scan else \
+            f"{100.0 * sum(str(r.get('legible_ceiling')) == 'True' for r in in_scan) / len(in_scan):.0f} %"
         return (f"{n} | {100.0 * ok / n:.0f} % | {f(err)} | {f(jumps, 0)} | {f(100 * cov, 1)} % | {f(cer)} | "
-                f"{f(cer_text)} | {100.0 * leg / n:.0f} % / {100.0 * leg_text / n:.0f} % | {refused}")
+                f"{f(cer_text)} | {100.0 * leg / n:.0f} % / {100.0 * leg_text / n:.0f} % / {ceiling} | {refused}")
     out = ["| factor | bin | scans | success | median mesh error (voxels) | median jumps | median coverage | "
-           "median CER (texture) | median CER (text region) | legible (texture / text region) | tool exit != 0 |",
+           "median CER (texture) | median CER (text region) | legible (texture / text region / in the scan) | "
+           "tool exit != 0 |",
            "|---|---|---|---|---|---|---|---|---|---|---|"]
-    out.append(f"| all | | {stats(rows)} |")
+    out += _factor_rows(rows, stats)
+    out.append("")
+    out.append("success: mean mesh error <= 0.5 voxel, 0 layer jumps, coverage >= 97 %; legible: CER <= 5 %; "
+               "in the scan: the ink read from the true surface (ink_ceiling). "
+               "Medians over the scans the tool meshed (jumps, error, CER); coverage counts a refused scan as 0.")
+    return "\n".join(out)
+
+
+def _factor_rows(rows, stats):
+    """The table's rows: all scans, then each factor's bins, each with stats(selected rows)."""
+    out = [f"| all | | {stats(rows)} |"]
     for name, key, bins in FACTORS:
         if bins is None:
             values = sorted({str(r.get(key)) for r in rows})
@@ -1601,9 +1706,20 @@ def summary_table(rows):
             sel = [r for r in rows if pred(r.get(key))]
             if sel:
                 out.append(f"| {name} | {label} | {stats(sel)} |")
-    out.append("")
-    out.append("success: mean mesh error <= 0.5 voxel, 0 layer jumps, coverage >= 97 %; legible: CER <= 5 %. "
-               "Medians over the scans the tool meshed (jumps, error, CER); coverage counts a refused scan as 0.")
+    return out
+
+
+def ceiling_table(rows):
+    """Markdown table of a ceiling run: per factor bin, how many scans read from the true
+    surface (the scan's own legibility, no tool involved)."""
+    def stats(sel):
+        cers = [_num(r.get("cer_ceiling")) for r in sel]
+        legible = sum(str(r.get("legible_ceiling")) == "True" for r in sel)
+        med = _median(cers)
+        return f"{len(sel)} | {100.0 * legible / len(sel):.0f} % | " + ("-" if not math.isfinite(med) else f"{med:.2f}")
+    out = ["| factor | bin | scans | legible in the scan (CER <= 5 %) | median CER from the true surface |",
+           "|---|---|---|---|---|"]
+    out += _factor_rows(rows, stats)
     return "\n".join(out)
 
 
@@ -1848,6 +1964,16 @@ def main():
     q.add_argument("--tool", default="build/bin/virtual-unwrap")
     q.add_argument("--jobs", type=int, default=1)
     q.add_argument("--strict", action="store_true", help="exit 2 if the tool crashed or scoring failed")
+    e = sub.add_parser("ceiling", help="how legible the scans themselves are: the ink read from the true surface")
+    e.add_argument("--scans", type=int, default=100)
+    e.add_argument("--seed", type=int, default=1)
+    e.add_argument("--out", required=True)
+    e.add_argument("--csv", required=True)
+    e.add_argument("--jobs", type=int, default=1)
+    e.add_argument("--region", choices=["accept", "wide"], default="accept")
+    e.add_argument("--small", action="store_true")
+    e.add_argument("--keep", choices=["all", "none"], default="none", help="keep the volumes")
+    e.add_argument("--param", action="append", metavar="KEY=VALUE", help="fix a parameter for every scan")
     s = sub.add_parser("summary", help="reprint the summary table of a CSV")
     s.add_argument("--csv", required=True)
     v = sub.add_parser("preview", help="PNG of a generated scan: slices and the true ink")
@@ -1887,6 +2013,25 @@ def main():
             sys.exit(2)
     elif args.command == "summary":
         print(summary_table(read_csv(args.csv)))
+    elif args.command == "ceiling":
+        os.makedirs(args.out, exist_ok=True)
+        overrides = parse_overrides(args.param)
+        tasks = [dict(seed=args.seed + i, out_root=args.out, region=args.region, small=args.small, keep=args.keep,
+                      overrides=overrides) for i in range(args.scans)]
+        with open(args.csv, "w", newline="") as f, \
+                concurrent.futures.ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+            writer = csv.DictWriter(f, fieldnames=CSV_KEYS, extrasaction="ignore", restval="")
+            writer.writeheader()
+            for row in pool.map(_ceiling_scan_star, tasks):
+                writer.writerow(row)
+                f.flush()
+                print(f"seed {row['seed']}: cer_ceiling {row.get('cer_ceiling', '')} ({row.get('ceiling_filter', '')})"
+                      + (f" SCORE ERROR {row['score_error']}" if row.get("score_error") else ""), flush=True)
+        rows = read_csv(args.csv)
+        print()
+        print(ceiling_table(rows))
+        if any(r.get("score_error") for r in rows):
+            sys.exit(2)
     elif args.command == "run":
         if args.selfcheck:
             selfcheck(args.tool)
