@@ -40,6 +40,10 @@ pydicom, PIL and tesseract are needed):
     sheet_stress.py rescore --out DIR --csv FILE [--rerun unwrap|mesh] [--jobs N] [--strict]
                                             score a run directory's scans again (after running
                                             the tool on them again)
+    sheet_stress.py ceiling --scans 100 --seed S --out DIR --csv FILE [--jobs N] [--require-legible]
+        How legible the scans themselves are, without the tool: each scan's ink read from the
+        TRUE surface (ink_ceiling; cer_ceiling per scan, the share legible per factor). `run`
+        (--stage unwrap) and `rescore` add cer_ceiling to every row as well.
     sheet_stress.py summary --csv FILE      reprint the summary table of a CSV
     sheet_stress.py selfcheck [--tool T]    the scorer against the truth itself (and T reads
                                             every format)
@@ -1974,6 +1978,8 @@ def main():
     e.add_argument("--small", action="store_true")
     e.add_argument("--keep", choices=["all", "none"], default="none", help="keep the volumes")
     e.add_argument("--param", action="append", metavar="KEY=VALUE", help="fix a parameter for every scan")
+    e.add_argument("--require-legible", action="store_true",
+                   help="exit 3 unless every scan reads from the true surface (a check of the generator's ink)")
     s = sub.add_parser("summary", help="reprint the summary table of a CSV")
     s.add_argument("--csv", required=True)
     v = sub.add_parser("preview", help="PNG of a generated scan: slices and the true ink")
@@ -2032,6 +2038,11 @@ def main():
         print(ceiling_table(rows))
         if any(r.get("score_error") for r in rows):
             sys.exit(2)
+        illegible = [r["seed"] for r in rows if r.get("legible_ceiling") != "True"]
+        if args.require_legible and (illegible or not rows):
+            print(f"\n{len(illegible)} of {len(rows)} scan(s) illegible from the true surface: " + ", ".join(illegible),
+                  file=sys.stderr)
+            sys.exit(3)
     elif args.command == "run":
         if args.selfcheck:
             selfcheck(args.tool)
