@@ -323,13 +323,16 @@ private:
                   SheetMesh &                                    sheet);
   static void
   Summarise(Sheet & sheet, double area);
-  /** Whether every piece of the group has at least PieceOnMeshFraction of its voxels within
-   * PieceOnMeshReach voxels of a point of the mesh (physical frame). */
+  /** Whether the group's mesh (physical frame) holds its pieces: each piece has at least
+   * PieceOnMeshFraction of its voxels within PieceOnMeshReach voxels of the mesh's surface,
+   * or at most PieceOffMeshFraction (then it is left out of `group`); the first piece must
+   * be on the mesh. */
   template <typename TLabelImage>
   static bool
-  PiecesOnMesh(const TLabelImage * labels, const std::vector<uint8_t> & group, const SheetMesh & mesh);
+  PiecesOnMesh(const TLabelImage * labels, SizeValueType first, std::vector<uint8_t> & group, const SheetMesh & mesh);
   static constexpr long   PieceOnMeshReach = 2;
   static constexpr double PieceOnMeshFraction = 0.5;
+  static constexpr double PieceOffMeshFraction = 0.05;
 
   SheetSurfaceMethodEnum                        m_Method{ SheetSurfaceMethodEnum::Auto };
   double                                        m_SpacingAlongSheet{ 0.0 };

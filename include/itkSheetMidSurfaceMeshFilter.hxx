@@ -26,6 +26,7 @@
 #include "itkSheetMeshAdaptor.h"
 #include "itkSheetMidSurfaceMeshFilter.h"
 #include "itkTouchingSheetSplitter.h"
+#include <algorithm>
 
 #include <algorithm>
 #include <array>
@@ -319,11 +320,13 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::MeshSheetFrom(Pieces &      
     {
       std::vector<std::string> groupWarnings;
       Sheet                    sheet = MeshLabels(pieces.Labels, pieces.Intensity, group, groupWarnings);
-      // Every piece meshed with it must lie on the roll's mesh: a loose fragment in the
-      // roll's box is a sheet of its own.
-      if (sheet.Report.Method == SheetSurfaceMethodEnum::Roll && PiecesOnMesh(pieces.Labels, group, sheet.Mesh))
+      // Every piece meshed with it must lie on the roll's mesh, or wholly off it (a loose
+      // fragment in the roll's box, or an arc the trace did not reach, is then a sheet of
+      // its own); a piece the mesh only grazes refuses the group.
+      if (sheet.Report.Method == SheetSurfaceMethodEnum::Roll && PiecesOnMesh(pieces.Labels, first, group, sheet.Mesh))
       {
         warnings.insert(warnings.end(), groupWarnings.begin(), groupWarnings.end());
+        grouped = static_cast<SizeValueType>(std::count(group.begin(), group.end(), uint8_t{ 1 }));
         sheet.Summary.Pieces = grouped;
         sheet.Pieces = group;
         for (SizeValueType l = first; l <= pieces.Objects; ++l)
@@ -523,22 +526,25 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::ToPhysicalFrame(
 template <typename TMaskImage, typename TOutputMesh>
 template <typename TLabelImage>
 bool
-SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::PiecesOnMesh(const TLabelImage *          labels,
-                                                                 const std::vector<uint8_t> & group,
-                                                                 const SheetMesh &            mesh)
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::PiecesOnMesh(const TLabelImage *    labels,
+                                                                 SizeValueType          first,
+                                                                 std::vector<uint8_t> & group,
+                                                                 const SheetMesh &      mesh)
 {
-  // The voxels within PieceOnMeshReach voxels of a mesh point, then each piece's share of
-  // them.
+  // The voxels within PieceOnMeshReach voxels of the mesh's surface (each triangle sampled
+  // at most a voxel apart: a roll's mesh points can lie several voxels apart), then each
+  // piece's share of them.
   const auto        region = labels->GetBufferedRegion();
   const auto        size = region.GetSize();
   std::vector<bool> nearMesh(region.GetNumberOfPixels(), false);
   const long        reach = PieceOnMeshReach;
-  for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
-  {
+  const auto        spacing = labels->GetSpacing();
+  const double      voxel = std::min({ spacing[0], spacing[1], spacing[2] });
+  const auto        mark = [&](const double * at) {
     typename TLabelImage::PointType p;
     for (unsigned d = 0; d < 3; ++d)
     {
-      p[d] = mesh.Points[3 * i + d];
+      p[d] = at[d];
     }
     typename TLabelImage::IndexType index;
     labels->TransformPhysicalPointToIndex(p, index);
@@ -552,6 +558,37 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::PiecesOnMesh(const TLabelIma
         }
       }
     }
+  };
+  const double * points = mesh.Points.data();
+  for (size_t t = 0; t < mesh.GetNumberOfTriangles(); ++t)
+  {
+    const double * a = points + 3 * static_cast<size_t>(mesh.Triangles[3 * t]);
+    const double * b = points + 3 * static_cast<size_t>(mesh.Triangles[3 * t + 1]);
+    const double * c = points + 3 * static_cast<size_t>(mesh.Triangles[3 * t + 2]);
+    double         longest = 0.0;
+    for (const auto & edge : { std::make_pair(a, b), std::make_pair(b, c), std::make_pair(c, a) })
+    {
+      double length2 = 0.0;
+      for (unsigned d = 0; d < 3; ++d)
+      {
+        length2 += (edge.first[d] - edge.second[d]) * (edge.first[d] - edge.second[d]);
+      }
+      longest = std::max(longest, std::sqrt(length2));
+    }
+    const auto steps = static_cast<unsigned>(std::max(1.0, std::ceil(longest / voxel)));
+    for (unsigned i = 0; i <= steps; ++i)
+    {
+      for (unsigned j = 0; i + j <= steps; ++j)
+      {
+        const double u = static_cast<double>(i) / steps, v = static_cast<double>(j) / steps, w = 1.0 - u - v;
+        double       at[3];
+        for (unsigned d = 0; d < 3; ++d)
+        {
+          at[d] = u * a[d] + v * b[d] + w * c[d];
+        }
+        mark(at);
+      }
+    }
   }
   std::vector<SizeValueType> on(group.size(), 0), all(group.size(), 0);
   const LabelPixelType *     label = labels->GetBufferPointer();
@@ -563,13 +600,22 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::PiecesOnMesh(const TLabelIma
       on[label[v]] += nearMesh[v] ? 1 : 0;
     }
   }
+  // Every piece on the mesh or wholly off it (then left out of the group), the first on it.
+  std::vector<uint8_t> kept = group;
   for (size_t l = 0; l < group.size(); ++l)
   {
-    if (all[l] > 0 && static_cast<double>(on[l]) < PieceOnMeshFraction * static_cast<double>(all[l]))
+    if (group[l] == 0 || all[l] == 0)
+    {
+      continue;
+    }
+    const double share = static_cast<double>(on[l]) / static_cast<double>(all[l]);
+    if (share < PieceOnMeshFraction && (l == first || share > PieceOffMeshFraction))
     {
       return false;
     }
+    kept[l] = share >= PieceOnMeshFraction ? 1 : 0;
   }
+  group = kept;
   return true;
 }
 
