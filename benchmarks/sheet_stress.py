@@ -1445,6 +1445,16 @@ def ink_ceiling(scan_dir, truth, volume=None):
     return {"cer_ceiling": best[0], "ceiling_filter": best[1], "legible_ceiling": bool(best[0] <= LEGIBLE_CER)}
 
 
+def remove_volume(scan_dir):
+    """Delete a scan's volume (whichever format it was written in); truth and outputs stay."""
+    for name in ("volume.mha", "tiff", "dicom"):
+        target = os.path.join(scan_dir, name)
+        if os.path.isdir(target):
+            shutil.rmtree(target)
+        elif os.path.exists(target):
+            os.remove(target)
+
+
 def score_scan(scan_dir, keep="failures", overlay=True, ceiling=False):
     """Score the tool's outputs in scan_dir against the truth; returns the CSV row."""
     with open(os.path.join(scan_dir, "truth.json")) as f:
@@ -1525,12 +1535,7 @@ def score_scan(scan_dir, keep="failures", overlay=True, ceiling=False):
         if not k.startswith("_"):
             row[k] = round(v, 5) if isinstance(v, float) else v
     if keep == "none" or (keep == "failures" and row.get("success") and not row.get("crash")):
-        for name in ("volume.mha", "tiff", "dicom"):
-            target = os.path.join(scan_dir, name)
-            if os.path.isdir(target):
-                shutil.rmtree(target)
-            elif os.path.exists(target):
-                os.remove(target)
+        remove_volume(scan_dir)
         layers = os.path.join(out, "layers.tif")
         if os.path.exists(layers):
             os.remove(layers)
@@ -1563,12 +1568,7 @@ def ceiling_scan(seed, out_root, region="accept", small=False, keep="none", over
     except Exception as e:  # a scoring failure is reported, not hidden
         row["score_error"] = f"{type(e).__name__}: {e}"
     if keep != "all":
-        for name in ("volume.mha", "tiff", "dicom"):
-            target = os.path.join(scan_dir, name)
-            if os.path.isdir(target):
-                shutil.rmtree(target)
-            elif os.path.exists(target):
-                os.remove(target)
+        remove_volume(scan_dir)
     return row
 
 
