@@ -474,6 +474,20 @@ class Roll:
     def arc_to_phi(self, s):
         return lerp(self.phi_of_s, self.s[0], self.s_step, s)
 
+    def frame(self, phi, z):
+        """Roll-frame mid-surface points at (phi, z), their derivative along phi and their
+        unit normals (outward)."""
+        pt = self.point(phi, z)
+        eps = 1e-3
+        dphi = (self.point(phi + eps, z) - self.point(phi - eps, z)) / (2 * eps)
+        dz = (self.point(phi, z + 0.05) - self.point(phi, z - 0.05)) / 0.1
+        nrm = np.cross(dphi, dz)
+        nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+        radial = pt.copy()
+        radial[:, 2] = 0
+        nrm *= np.sign(np.sum(nrm * radial, axis=1))[:, None]
+        return pt, dphi, nrm
+
     def samples(self, h, phi_limits=True):
         """Mid-surface samples every h along s and w: volume points, unit normals (outward),
         unit tangents along s and along w, s, w and turn index."""
@@ -490,16 +504,8 @@ class Roll:
             zz = np.concatenate([zz[keep], zc, zc])  # and each row's exact ends
             ss = np.concatenate([ss[keep], s0[i:i + chunk], s1[i:i + chunk]])
             phi = self.arc_to_phi(ss)
-            pt = self.point(phi, zz)
-            eps = 1e-3
-            dphi = (self.point(phi + eps, zz) - self.point(phi - eps, zz)) / (2 * eps)
-            dz = (self.point(phi, zz + 0.05) - self.point(phi, zz - 0.05)) / 0.1
+            pt, dphi, nrm = self.frame(phi, zz)
             ts = dphi / np.linalg.norm(dphi, axis=1, keepdims=True)
-            nrm = np.cross(dphi, dz)
-            nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
-            radial = pt.copy()
-            radial[:, 2] = 0
-            nrm *= np.sign(np.sum(nrm * radial, axis=1))[:, None]
             tw = np.cross(nrm, ts)
             tw *= np.sign(tw[:, 2])[:, None]
             out["points"].append(self.to_volume(pt).astype(np.float32))
@@ -1387,7 +1393,7 @@ CEILING_SIGMAS = (1.0, 2.0, 3.0, 4.0)  # Gaussian smoothing of the ideal texture
 CEILING_BACKGROUND = (0.0, 20.0)      # and its slow background taken out (Gaussian, pixels; 0: none)
 
 
-def ink_ceiling(scan_dir, truth, volume=None):
+def ink_ceiling(scan_dir):
     """How legible the scan itself is: the volume sampled on the TRUE mid-surface, over the
     ink layer's true depth (three samples across it, along the true normal), at the ink
     image's pixels (half a voxel); then smoothed (CEILING_SIGMAS) with or without its slow
@@ -1397,27 +1403,17 @@ def ink_ceiling(scan_dir, truth, volume=None):
     to read better than this, so a scan with cer_ceiling > 5 % is illegible in the scan, not
     by the tool's fault. ceiling.png keeps the best image."""
     from PIL import Image
+    roll, truth = load_roll(scan_dir)
     p, ink = truth["parameters"], truth["ink"]
-    if volume is None:
-        volume = read_volume(scan_dir, truth)
-    roll = Roll(p)
-    roll.center = np.array(truth["volume"]["roll_center_voxels"])
+    volume = read_volume(scan_dir, truth)
     with Image.open(os.path.join(scan_dir, "truth_ink.png")) as im:
         width, height = im.size
     pad = 16
     s = ink["ink_s_origin"] + np.arange(-pad, width + pad) * TEXTURE_PIXEL
     w = ink["ink_w_top"] - np.arange(-pad, height + pad) * TEXTURE_PIXEL
     ss_, ww = np.meshgrid(s, w)
-    phi, z = roll.arc_to_phi(ss_.ravel()), ww.ravel()
-    pt = roll.point(phi, z)
-    eps = 1e-3
-    dphi = (roll.point(phi + eps, z) - roll.point(phi - eps, z)) / (2 * eps)
-    dz = (roll.point(phi, z + 0.05) - roll.point(phi, z - 0.05)) / 0.1
-    normal = np.cross(dphi, dz)
-    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    radial = pt.copy()
-    radial[:, 2] = 0
-    normal *= np.sign(np.sum(normal * radial, axis=1))[:, None]
+    z = ww.ravel()
+    pt, _, normal = roll.frame(roll.arc_to_phi(ss_.ravel()), z)
     t = p["thickness"] * roll.thickness_factor(z)[:, None]
     sign = 1.0 if p["ink_face"] == "outer" else -1.0
     total = np.zeros(len(z))
@@ -1515,7 +1511,7 @@ def score_scan(scan_dir, keep="failures", overlay=True, ceiling=False):
         figures["legible"] = bool(figures.get("cer", float("inf")) <= LEGIBLE_CER)
         figures["legible_text"] = bool(figures.get("cer_text", float("inf")) <= LEGIBLE_CER)
         if ceiling and os.path.exists(os.path.join(scan_dir, truth["volume"]["input"])):
-            figures.update(ink_ceiling(scan_dir, truth))
+            figures.update(ink_ceiling(scan_dir))
         if overlay and not figures["success"] and os.path.exists(os.path.join(scan_dir, truth["volume"]["input"])):
             volume = read_volume(scan_dir, truth)
             title = (f"seed {p['seed']}: turns {p['turns']:.1f}, gap {p['gap']:.2f}, t {p['thickness']:.2f}, "
@@ -1564,7 +1560,7 @@ def ceiling_scan(seed, out_root, region="accept", small=False, keep="none", over
     truth = generate(draw_parameters(seed, region, small, overrides), scan_dir, verbose=False)
     row = truth_row(truth)
     try:
-        row.update(ink_ceiling(scan_dir, truth))
+        row.update(ink_ceiling(scan_dir))
     except Exception as e:  # a scoring failure is reported, not hidden
         row["score_error"] = f"{type(e).__name__}: {e}"
     if keep != "all":

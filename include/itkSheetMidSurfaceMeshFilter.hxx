@@ -26,7 +26,6 @@
 #include "itkSheetMeshAdaptor.h"
 #include "itkSheetMidSurfaceMeshFilter.h"
 #include "itkTouchingSheetSplitter.h"
-#include <algorithm>
 
 #include <algorithm>
 #include <array>
