@@ -30,7 +30,8 @@ namespace itk {
  * \brief Legibility of a flat image of text: what tesseract OCR reads in it and the
  * character error rate (CER) against the known text.
  *
- * Compute() windows the image as texture.png shows it (LayerStackTexture::DisplayWindow()
+ * Compute() shows the image as texture.png does: the background's noise cleared
+ * (LayerStackTexture::ClearBackground()) and windowed (LayerStackTexture::DisplayWindow()
  * of its finite pixels: the background's median and speckle below the ink's side of the
  * window, the 0.5th or 99.5th percentile at the other; non-finite pixels, e.g. NaN off an
  * unwrapped sheet, take the median of the finite ones, the background where ink covers a

@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "itkLayerStackTexture.h"
 #include "itkBilateralImageFilter.h"
+#include "itkBinaryReconstructionByDilationImageFilter.h"
 #include "itkGaussianImageSource.h"
 #include "itkMultiThreaderBase.h"
 #include "itkTikhonovDeconvolutionImageFilter.h"
@@ -164,6 +165,17 @@ TextureRanks(const TextureType * texture)
 // The display's black point lies this many noise spreads above the background's median
 // (DisplayWindow).
 constexpr double BackgroundClip = 0.5;
+
+// ClearBackground: ink is what lies beyond the background by InkSpreads noise spreads and
+// connects to a pixel beyond InkCoreSpreads (Gaussian noise passes 4.5 spreads about 3
+// times in a million pixels).
+constexpr double InkSpreads = 1.0;
+constexpr double InkCoreSpreads = 4.5;
+
+// StrokeContrast's blocks: at least this many pixels long, scored when at least this share
+// of their pixels is on the sheet.
+constexpr size_t StrokeBlockMinimum = 64;
+constexpr double StrokeBlockFiniteShare = 0.25;
 
 // 1.4826 x the median absolute deviation of the ranked values from their `median`.
 double
@@ -377,10 +389,64 @@ LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigm
   const size_t  n = texture->GetBufferedRegion().GetNumberOfPixels();
   for (size_t i = 0; i < n; ++i)
   {
-    b[i] =
-      std::isfinite(f[i]) && std::isfinite(c[i]) && (keep == nullptr || std::isfinite(keep[i])) ? f[i] - c[i] : NaN;
+    b[i] = std::isfinite(f[i]) && std::isfinite(c[i]) ? f[i] - c[i] : NaN;
   }
-  return InkContrast(band);
+  // The band-pass rings where the sheet ends: that border, as wide as the coarse
+  // Gaussian's reach, takes no part in the score, nor do the pixels left out (which carry
+  // their own reach).
+  const auto scored = TrimBorder(band, 6.0 * strokeSigma);
+  float *    v = scored->GetBufferPointer();
+  for (size_t i = 0; keep != nullptr && i < n; ++i)
+  {
+    v[i] = std::isfinite(keep[i]) ? v[i] : NaN;
+  }
+  const detail::FiniteRanks ranks = TextureRanks(scored);
+  if (ranks.GetCount() < 2)
+  {
+    return 0.0;
+  }
+  const double median = ranks.Quantile(0.5), spread = Spread(ranks, median);
+  if (!(spread > 0.0))
+  {
+    return 0.0;
+  }
+  // Blocks along the texture's longer side, as long as its shorter side, overlapping by
+  // half: the brightest percent of the block richest in strokes over the whole texture's
+  // spread. Writing that covers a few per cent of a long sheet fills its blocks' top
+  // percent, where over the whole texture it would not reach the 99th percentile.
+  const auto         size = scored->GetBufferedRegion().GetSize();
+  const bool         alongX = size[0] >= size[1];
+  const size_t       length = alongX ? size[0] : size[1], across = alongX ? size[1] : size[0];
+  const size_t       block = std::max<size_t>(across, StrokeBlockMinimum), step = std::max<size_t>(1, block / 2);
+  double             best = 0.0;
+  std::vector<float> values;
+  for (size_t start = 0; start < length; start += step)
+  {
+    const size_t end = std::min(length, start + block);
+    values.clear();
+    for (size_t a = start; a < end; ++a)
+    {
+      for (size_t k = 0; k < across; ++k)
+      {
+        const float x = alongX ? v[k * size[0] + a] : v[a * size[0] + k];
+        if (std::isfinite(x))
+        {
+          values.push_back(x);
+        }
+      }
+    }
+    if (static_cast<double>(values.size()) >= StrokeBlockFiniteShare * static_cast<double>(block * across))
+    {
+      const auto top = values.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(values.size() - 1));
+      std::nth_element(values.begin(), top, values.end());
+      best = std::max(best, (static_cast<double>(*top) - median) / spread);
+    }
+    if (end == length)
+    {
+      break;
+    }
+  }
+  return best > 0.0 ? best : (ranks.Quantile(0.99) - median) / spread;
 }
 
 std::vector<double>
@@ -402,6 +468,61 @@ LayerStackTexture::DisplayWindow(const TextureType * texture, bool inkIsBright)
     return { black, white };
   }
   return { low, std::max(high, low + 1e-6) };
+}
+
+LayerStackTexture::TextureType::Pointer
+LayerStackTexture::ClearBackground(const TextureType * texture, bool inkIsBright)
+{
+  CheckTexture(texture, "ClearBackground");
+  auto          result = NewTexture(texture);
+  const float * in = texture->GetBufferPointer();
+  float *       out = result->GetBufferPointer();
+  const size_t  n = texture->GetBufferedRegion().GetNumberOfPixels();
+  std::copy(in, in + n, out);
+  const detail::FiniteRanks ranks = TextureRanks(texture);
+  if (ranks.GetCount() < 2)
+  {
+    return result;
+  }
+  const double median = ranks.Quantile(0.5), spread = Spread(ranks, median);
+  if (!(spread > 0.0))
+  {
+    return result;
+  }
+  // Beyond the background in the ink's direction, in noise spreads (NaN: not at all).
+  const double sign = inkIsBright ? 1.0 : -1.0;
+  using MaskType = Image<unsigned char, 2>;
+  const auto mask = [&](double spreads) {
+    auto image = MaskType::New();
+    image->CopyInformation(texture);
+    image->SetRegions(texture->GetBufferedRegion());
+    image->Allocate();
+    std::transform(in, in + n, image->GetBufferPointer(), [&](float v) {
+      return std::isfinite(v) && sign * (v - median) > spreads * spread ? 1 : 0;
+    });
+    return image;
+  };
+  const auto core = mask(InkCoreSpreads);
+  const auto coreBuffer = core->GetBufferPointer();
+  if (std::none_of(coreBuffer, coreBuffer + n, [](unsigned char c) { return c != 0; }))
+  {
+    return result;
+  }
+  using ReconstructionType = BinaryReconstructionByDilationImageFilter<MaskType>;
+  auto reconstruction = ReconstructionType::New();
+  reconstruction->SetMarkerImage(core);
+  reconstruction->SetMaskImage(mask(InkSpreads));
+  reconstruction->SetForegroundValue(1);
+  reconstruction->SetBackgroundValue(0);
+  reconstruction->SetFullyConnected(true);
+  reconstruction->Update();
+  const unsigned char * ink = reconstruction->GetOutput()->GetBufferPointer();
+  const auto            background = static_cast<float>(median);
+  for (size_t k = 0; k < n; ++k)
+  {
+    out[k] = std::isfinite(in[k]) && ink[k] == 0 ? background : in[k];
+  }
+  return result;
 }
 
 double

@@ -179,7 +179,9 @@ TextLegibility::Compute()
   // Non-finite pixels (NaN off an unwrapped sheet) take no part in it and take the median
   // of the finite ones: the sheet's background, ink covering a minority of it, so that the
   // sheet's outline does not read as a stroke.
-  const float *             buffer = m_Image->GetBufferPointer();
+  // What texture.png shows: the background's noise cleared, in the window of the image.
+  const auto                cleared = LayerStackTexture::ClearBackground(m_Image, m_InkIsBright);
+  const float *             buffer = cleared->GetBufferPointer();
   const std::vector<double> median = LayerStackTexture::Quantiles(m_Image, { 0.5 });
   if (median.empty())
   {

@@ -574,6 +574,93 @@ TEST(LayerStackTexture, StrokeContrastFindsTheInkedSlabUnderNoise)
   EXPECT_THROW(LST::StrokeContrast(slab, 0.0), itk::ExceptionObject);
 }
 
+// A few words on a long sheet: the strokes cover a small fraction of a per cent of the
+// texture, below its 99th percentile, but fill the top percent of the blocks they lie in,
+// so the inked slab still scores highest.
+TEST(LayerStackTexture, StrokeContrastFindsAShortTextOnALongSheet)
+{
+  std::mt19937                    random(11);
+  std::normal_distribution<float> noise(0.0f, 1.0f);
+  const unsigned                  layers = 9, columns = 3000, rows = 40;
+  // Strokes 3 pixels wide every 10 pixels in rows 12 to 28 of columns 1400 to 1480.
+  auto ink = [](unsigned x, unsigned y) { return y >= 12 && y < 28 && x >= 1400 && x < 1480 && x % 10 < 3; };
+  auto stack = MakeStack(columns, rows, layers, [&](unsigned x, unsigned y, unsigned k) {
+    return 1.0f + (k >= 2 && k <= 4 && ink(x, y) ? 1.5f : 0.0f) + noise(random);
+  });
+  std::vector<double> scores;
+  for (unsigned first = 0; first + 3 <= layers; ++first)
+  {
+    scores.push_back(LST::StrokeContrast(LST::Smooth(LST::LayerWindow(stack, first, 3), 0.5), 0.5));
+  }
+  const auto best = std::max_element(scores.begin(), scores.end());
+  EXPECT_EQ(best - scores.begin(), 2);
+  EXPECT_GT(*best, 1.5 * scores.back());
+}
+
+// Strong strokes with faint parts on a noisy background: the strokes and their faint parts
+// are kept as they are, the background's speckle takes the median; NaN stays NaN; a
+// texture of noise alone is returned unchanged; dark ink is cleared the other way round.
+TEST(LayerStackTexture, ClearBackgroundKeepsTheInkAndClearsTheSpeckle)
+{
+  std::mt19937                    random(5);
+  std::normal_distribution<float> noise(0.0f, 1.0f);
+  const unsigned                  columns = 400, rows = 100;
+  // Vertical strokes 4 pixels wide (+9) every 40 pixels, each with a faint tail (+4, as
+  // far above the background as the noise often reaches) to its right.
+  auto               strong = [](unsigned x, unsigned y) { return y >= 30 && y < 70 && x % 40 < 4; };
+  auto               faint = [](unsigned x, unsigned y) { return y >= 45 && y < 49 && x % 40 >= 4 && x % 40 < 14; };
+  std::vector<float> values(columns * rows);
+  for (auto & v : values)
+  {
+    v = noise(random);
+  }
+  for (const bool bright : { true, false })
+  {
+    const float sign = bright ? 1.0f : -1.0f;
+    const auto  texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
+      if (x < 2 && y < 2)
+      {
+        return NaN;
+      }
+      return 10.0f + values[y * columns + x] + sign * (strong(x, y) ? 9.0f : faint(x, y) ? 4.0f : 0.0f);
+    });
+    const auto  cleared = LST::ClearBackground(texture, bright);
+    const float median = static_cast<float>(LST::Quantiles(texture, { 0.5 })[0]);
+    size_t      inkKept = 0, inkPixels = 0, speckle = 0, background = 0;
+    for (unsigned y = 0; y < rows; ++y)
+    {
+      for (unsigned x = 0; x < columns; ++x)
+      {
+        const itk::Index<2> i = { { long(x), long(y) } };
+        const float         before = texture->GetPixel(i), after = cleared->GetPixel(i);
+        if (!std::isfinite(before))
+        {
+          EXPECT_TRUE(std::isnan(after));
+        }
+        else if (strong(x, y) || faint(x, y))
+        {
+          ++inkPixels;
+          inkKept += after == before ? 1 : 0;
+        }
+        else
+        {
+          ++background;
+          speckle += after != median ? 1 : 0;
+        }
+      }
+    }
+    EXPECT_GT(static_cast<double>(inkKept), 0.95 * static_cast<double>(inkPixels)) << (bright ? "bright" : "dark");
+    // Only the noise touching a stroke stays: under 2 % of the background (one spread
+    // beyond the median: 16 %).
+    EXPECT_LT(static_cast<double>(speckle), 0.02 * static_cast<double>(background)) << (bright ? "bright" : "dark");
+  }
+  const auto plain = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) { return values[y * columns + x]; });
+  const auto same = LST::ClearBackground(plain);
+  EXPECT_TRUE(
+    std::equal(plain->GetBufferPointer(), plain->GetBufferPointer() + columns * rows, same->GetBufferPointer()));
+  EXPECT_THROW(LST::ClearBackground(nullptr), itk::ExceptionObject);
+}
+
 TEST(LayerStackTexture, MedianEqualsTheMedianOfEachWindow)
 {
   // Random values with holes off the sheet, 3 x 3 and 5 x 5 windows: every pixel equals the

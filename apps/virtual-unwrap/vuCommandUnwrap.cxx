@@ -184,8 +184,9 @@ TextureParametersJson(const itk::ReadableTextureImageFilter<VolumeType, TextureT
            { "selection",
              { { "criterion",
                  selection.FocalSlabs ? "noisy scan: focal slabs (mean of 3 or 5 layers) at every depth; highest "
-                                        "stroke contrast, the ink contrast of the denoised slab band-passed "
-                                        "between Gaussians of 0.5 and 3 voxels"
+                                        "stroke contrast, the 99th percentile of the denoised slab band-passed "
+                                        "between Gaussians of 0.5 and 3 voxels, in the block along the sheet "
+                                        "where it is highest, over the band's spread"
                                       : "highest ink contrast, (99th percentile - median) / (1.4826 median "
                                         "absolute deviation) of the denoised texture" },
                { "candidates", candidates } } } };

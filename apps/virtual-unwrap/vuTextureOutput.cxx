@@ -54,11 +54,13 @@ EightBit(const itk::Image<float, 2> * texture)
     throw UsageError("the texture has no pixel on the sheet");
   }
   const auto lo = static_cast<float>(window[0]), hi = std::max(static_cast<float>(window[1]), lo + 1e-6f);
+  // The background's noise cleared, shown in the window of the texture as it was.
+  const auto shown = itk::LayerStackTexture::ClearBackground(texture);
   auto       out = itk::Image<unsigned char, 2>::New();
   out->CopyInformation(texture);
   out->SetRegions(texture->GetBufferedRegion());
   out->Allocate();
-  itk::ImageRegionConstIterator<TextureType>             in(texture, texture->GetBufferedRegion());
+  itk::ImageRegionConstIterator<TextureType>             in(shown, shown->GetBufferedRegion());
   itk::ImageRegionIterator<itk::Image<unsigned char, 2>> o(out, out->GetBufferedRegion());
   for (; !in.IsAtEnd(); ++in, ++o)
   {

@@ -31,8 +31,9 @@ namespace vu {
 itk::TextureLayersEnums::Filter
 FilterFromName(const std::string & name);
 
-/** 8-bit view of a texture: contrast stretched over LayerStackTexture::DisplayWindow() of
- * the sheet's pixels (the finite ones: the background dark, the ink bright); off the sheet
+/** 8-bit view of a texture: the background's noise cleared (LayerStackTexture::
+ * ClearBackground()), contrast stretched over LayerStackTexture::DisplayWindow() of the
+ * sheet's pixels (the finite ones: the background dark, the ink bright); off the sheet
  * black. Throws vu::UsageError when no pixel is on the sheet. */
 itk::Image<unsigned char, 2>::Pointer
 EightBit(const itk::Image<float, 2> * texture);
