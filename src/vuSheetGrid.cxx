@@ -167,13 +167,12 @@ RollEdgeRowFit(const std::vector<std::pair<long, double>> & window,
 
 // Point of column c of a grid row from the slices of its window (slice, weight): the
 // weighted mean of the slices' points within `agreement` of their weighted median point
-// (the median alone where none is). With `at` (a slice coordinate, for a row whose window
-// the traced range cuts), a weighted straight-line fit along those slices taken at `at`
-// instead: the mean lies inside the window, and a sheet that moves along the axis (a taper,
-// a skew) would leave the edge row behind it. Inner rows keep the mean: where the agreement
-// leaves out one side of a symmetric window (a touch's edge along the axis), a line through
-// the other side would carry the row off along that side's slope.
-void
+// (the median alone where none is); returns the share of the window's weight that agrees. With `at` (a slice
+// coordinate, for a row whose window the traced range cuts), a weighted straight-line fit along those slices taken at
+// `at` instead: the mean lies inside the window, and a sheet that moves along the axis (a taper, a skew) would leave
+// the edge row behind it. Inner rows keep the mean: where the agreement leaves out one side of a symmetric window (a
+// touch's edge along the axis), a line through the other side would carry the row off along that side's slope.
+double
 RobustRowPoint(const std::vector<std::pair<long, double>> & window,
                const std::vector<Polyline> &                columnsOf,
                size_t                                       c,
@@ -197,9 +196,10 @@ RobustRowPoint(const std::vector<std::pair<long, double>> & window,
     const double * p = &columnsOf[static_cast<size_t>(k)][2 * c];
     return std::hypot(p[0] - median[0], p[1] - median[1]) <= agreement;
   };
-  double sum[2] = { 0.0, 0.0 }, weightSum = 0.0, sliceSum = 0.0;
+  double sum[2] = { 0.0, 0.0 }, weightSum = 0.0, sliceSum = 0.0, windowWeight = 0.0;
   for (const auto & [k, weight] : window)
   {
+    windowWeight += weight;
     if (agrees(k))
     {
       const double * p = &columnsOf[static_cast<size_t>(k)][2 * c];
@@ -213,13 +213,14 @@ RobustRowPoint(const std::vector<std::pair<long, double>> & window,
   {
     point[0] = median[0];
     point[1] = median[1];
-    return;
+    return 0.0;
   }
   point[0] = sum[0] / weightSum;
   point[1] = sum[1] / weightSum;
+  const double share = weightSum / windowWeight;
   if (!at)
   {
-    return;
+    return share;
   }
   const double meanSlice = sliceSum / weightSum;
   double       spread = 0.0, covariance[2] = { 0.0, 0.0 };
@@ -239,6 +240,7 @@ RobustRowPoint(const std::vector<std::pair<long, double>> & window,
     point[0] += covariance[0] / spread * (*at - meanSlice);
     point[1] += covariance[1] / spread * (*at - meanSlice);
   }
+  return share;
 }
 } // namespace
 
@@ -312,7 +314,21 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
       }
       else
       {
-        RobustRowPoint(window, columnsOf, c, agreement, cut ? std::optional<double>(z / sz) : std::nullopt, point);
+        const double share =
+          RobustRowPoint(window, columnsOf, c, agreement, cut ? std::optional<double>(z / sz) : std::nullopt, point);
+        // A roll's column that slides along its turn from slice to slice (where the sheet's
+        // length changes along the axis, by several voxels a slice) leaves no majority near
+        // the window's median point, which, taken coordinate by coordinate, lies off the sheet
+        // between two slices' points: there the column's radius and angle about the axis are
+        // fitted along the window instead and taken at the row, which stays on the turn.
+        if (share < 0.5 && !cut && rollAxis != nullptr)
+        {
+          if (const auto trend = RollEdgeRowFit(window, columnsOf, c, agreement, z / sz, *rollAxis, sz))
+          {
+            point[0] = rollAxis->Centre[0] + rollAxis->Slope[0] * z + trend->Radius * std::cos(trend->Angle);
+            point[1] = rollAxis->Centre[1] + rollAxis->Slope[1] * z + trend->Radius * std::sin(trend->Angle);
+          }
+        }
       }
       mesh.Points[3 * p] = point[0];
       mesh.Points[3 * p + 1] = point[1];

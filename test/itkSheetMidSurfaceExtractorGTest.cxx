@@ -294,6 +294,49 @@ TEST(SheetMidSurfaceExtractor, SlicesThatCannotBeTracedAreInterpolatedAlongTheTu
   EXPECT_LT(largest, 0.75); // 0.67; the traced slices' points reach as far
 }
 
+TEST(SheetMidSurfaceExtractor, ColumnsSlidingAlongTheirTurnKeepTheRowsOnTheSheet)
+{
+  // The spiral turns by 0.25 radian per slice, so a column (a fixed fraction of the sheet's
+  // length) slides along its turn by 3 to 7 voxels from one slice to the next, as where a
+  // roll's sheet is longer in some slices than in others. A row's window then holds no
+  // majority of points near their median point taken coordinate by coordinate, which lies
+  // between two slices' points, off the sheet (2.7 voxels); the column's radius and angle
+  // about the axis, fitted along the window, keep the row on its turn (0.76).
+  constexpr double               twist = 0.25;
+  SpiralVolume                   volume(16, 1000, 0, 0, twist);
+  itk::SheetMidSurfaceExtractor  extractor;
+  itk::SheetMidSurfaceParameters parameters;
+  parameters.SpacingAlongAxis = 0.5; // every other row halfway between two slices
+  extractor.SetParameters(parameters);
+  const itk::SheetMesh mesh = extractor.Extract(volume.View());
+  EXPECT_EQ(extractor.GetReport().Method, itk::SheetSurfaceMethodEnum::Roll);
+  double largest = 0.0;
+  size_t inner = 0;
+  for (size_t p = 0; p < mesh.GetNumberOfPoints(); ++p)
+  {
+    const double z = mesh.Points[3 * p + 2];
+    const int    column = mesh.GridIndex[2 * p + 1];
+    // Inner rows only: the edge rows, past the traced slices, are fitted differently.
+    if (column < 2 || column > mesh.GridColumns - 3 || z < 2.0 || z > 13.0)
+    {
+      continue;
+    }
+    ++inner;
+    const double x = mesh.Points[3 * p] - 40.0, y = mesh.Points[3 * p + 1] - 40.0;
+    double       phi = std::remainder(std::atan2(y, x) - twist * z, 2.0 * Pi);
+    phi = phi < 0.0 ? phi + 2.0 * Pi : phi;
+    double nearest = 1e9;
+    for (int turn = 0; turn < 3; ++turn)
+    {
+      nearest = std::min(nearest, std::abs(std::hypot(x, y) - (12.0 + 6.0 * (phi + 2.0 * Pi * turn) / (2.0 * Pi))));
+    }
+    largest = std::max(largest, nearest);
+  }
+  std::cout << "inner rows: " << inner << " points, farthest " << largest << " voxel from the sheet" << std::endl;
+  EXPECT_GT(inner, 0u);
+  EXPECT_LT(largest, 1.0);
+}
+
 TEST(SheetMidSurfaceExtractor, RowsPastTheTracedSlicesFollowTheRollsTaper)
 {
   // The spiral's radius grows by 0.4 voxel per slice; the first and last three of its 24
