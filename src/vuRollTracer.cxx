@@ -303,6 +303,27 @@ FirstDisagreement(const Tracer::Trace & a, const Tracer::Trace & b, double pitch
   return -1;
 }
 
+// Whether every place where two traces differ by more than half the turn spacing lies in
+// one stretch shorter than `longest` angular steps, with the traces agreeing on both sides
+// of it: a touch that begins or ends between the two slices (one turn pushed onto the next
+// over a short arc in one slice and not in the other), not a trace that lost its turn,
+// which stays off it from there on.
+bool
+DisagreeLocally(const Tracer::Trace & a, const Tracer::Trace & b, double pitch, long longest)
+{
+  const long from = std::max(a.First, b.First), to = std::min(a.Last(), b.Last());
+  long       first = -1, last = -1;
+  for (long m = from; m <= to; ++m)
+  {
+    if (std::abs(a.At(m) - b.At(m)) > 0.5 * pitch)
+    {
+      first = first < 0 ? m : first;
+      last = m;
+    }
+  }
+  return first >= 0 && last - first < longest && first - from >= longest && to - last >= longest;
+}
+
 // A trace that stopped short of its prior's ends (a touch it could not pass, a faint
 // stretch, a streak, the part of a turn outside the field of view) would lose the rest of
 // the roll for every slice after it. It is traced again from the prior's stretch beyond
@@ -567,7 +588,8 @@ TraceOutwards(const Tracer &                tracer,
       // a turn (noise, a streak, a faint stretch): it is dropped (the slice is then
       // interpolated from its neighbours) and the prior carried on, unless the slices
       // keep disagreeing with it for longer than a few slices (the sheet itself changed).
-      if (FirstDisagreement(prior, traces[slices[i]], tracer.Pitch()) >= 0 && rejected < MaximumRejected)
+      if (FirstDisagreement(prior, traces[slices[i]], tracer.Pitch()) >= 0 && rejected < MaximumRejected &&
+          !DisagreeLocally(prior, traces[slices[i]], tracer.Pitch(), tracer.Frame().Rays / 8))
       {
         traces[slices[i]] = Tracer::Trace{};
         ++rejected;
