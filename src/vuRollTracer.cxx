@@ -303,25 +303,22 @@ FirstDisagreement(const Tracer::Trace & a, const Tracer::Trace & b, double pitch
   return -1;
 }
 
-// Whether every place where two traces differ by more than half the turn spacing lies in
-// one stretch shorter than `longest` angular steps, with the traces agreeing on both sides
-// of it: a touch that begins or ends between the two slices (one turn pushed onto the next
-// over a short arc in one slice and not in the other), not a trace that lost its turn,
-// which stays off it from there on.
+// Whether every place where two traces differ by more than half the turn spacing, the
+// first at `first` (FirstDisagreement), lies in one stretch shorter than `longest` angular
+// steps, with the traces agreeing for at least as long on both sides of it: a touch that
+// begins or ends between the two slices (one turn pushed onto the next over a short arc in
+// one slice and not in the other), not a trace that lost its turn, which stays off it from
+// there on.
 bool
-DisagreeLocally(const Tracer::Trace & a, const Tracer::Trace & b, double pitch, long longest)
+DisagreeLocally(const Tracer::Trace & a, const Tracer::Trace & b, double pitch, long first, long longest)
 {
   const long from = std::max(a.First, b.First), to = std::min(a.Last(), b.Last());
-  long       first = -1, last = -1;
-  for (long m = from; m <= to; ++m)
+  long       last = to;
+  while (last > first && std::abs(a.At(last) - b.At(last)) <= 0.5 * pitch)
   {
-    if (std::abs(a.At(m) - b.At(m)) > 0.5 * pitch)
-    {
-      first = first < 0 ? m : first;
-      last = m;
-    }
+    --last;
   }
-  return first >= 0 && last - first < longest && first - from >= longest && to - last >= longest;
+  return last - first < longest && first - from >= longest && to - last >= longest;
 }
 
 // A trace that stopped short of its prior's ends (a touch it could not pass, a faint
@@ -588,8 +585,9 @@ TraceOutwards(const Tracer &                tracer,
       // a turn (noise, a streak, a faint stretch): it is dropped (the slice is then
       // interpolated from its neighbours) and the prior carried on, unless the slices
       // keep disagreeing with it for longer than a few slices (the sheet itself changed).
-      if (FirstDisagreement(prior, traces[slices[i]], tracer.Pitch()) >= 0 && rejected < MaximumRejected &&
-          !DisagreeLocally(prior, traces[slices[i]], tracer.Pitch(), tracer.Frame().Rays / 8))
+      const long off = FirstDisagreement(prior, traces[slices[i]], tracer.Pitch());
+      if (off >= 0 && rejected < MaximumRejected &&
+          !DisagreeLocally(prior, traces[slices[i]], tracer.Pitch(), off, tracer.Frame().Rays / 8))
       {
         traces[slices[i]] = Tracer::Trace{};
         ++rejected;

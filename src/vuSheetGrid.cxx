@@ -167,11 +167,13 @@ RollEdgeRowFit(const std::vector<std::pair<long, double>> & window,
 
 // Point of column c of a grid row from the slices of its window (slice, weight): the
 // weighted mean of the slices' points within `agreement` of their weighted median point
-// (the median alone where none is); returns the share of the window's weight that agrees. With `at` (a slice
-// coordinate, for a row whose window the traced range cuts), a weighted straight-line fit along those slices taken at
-// `at` instead: the mean lies inside the window, and a sheet that moves along the axis (a taper, a skew) would leave
-// the edge row behind it. Inner rows keep the mean: where the agreement leaves out one side of a symmetric window (a
-// touch's edge along the axis), a line through the other side would carry the row off along that side's slope.
+// (the median alone where none is); returns the share of the window's weight that agrees.
+// With `at` (a slice coordinate, for a row whose window the traced range cuts), a weighted
+// straight-line fit along those slices taken at `at` instead: the mean lies inside the
+// window, and a sheet that moves along the axis (a taper, a skew) would leave the edge row
+// behind it. Inner rows keep the mean: where the agreement leaves out one side of a
+// symmetric window (a touch's edge along the axis), a line through the other side would
+// carry the row off along that side's slope.
 double
 RobustRowPoint(const std::vector<std::pair<long, double>> & window,
                const std::vector<Polyline> &                columnsOf,
@@ -303,16 +305,10 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
     const double past = z / sz - std::clamp(z / sz, static_cast<double>(firstGood), static_cast<double>(lastGood));
     for (size_t c = 0; c < columns; ++c)
     {
-      const size_t p = r * columns + c;
-      double       point[2];
-      if (!trends.empty() && trends[c])
-      {
-        const RollColumnTrend & trend = *trends[c];
-        const double            radius = std::max(0.0, trend.Radius + radialSlope * past);
-        point[0] = rollAxis->Centre[0] + rollAxis->Slope[0] * z + radius * std::cos(trend.Angle);
-        point[1] = rollAxis->Centre[1] + rollAxis->Slope[1] * z + radius * std::sin(trend.Angle);
-      }
-      else
+      const size_t                   p = r * columns + c;
+      double                         point[2];
+      std::optional<RollColumnTrend> trend = trends.empty() ? std::nullopt : trends[c];
+      if (!trend)
       {
         const double share =
           RobustRowPoint(window, columnsOf, c, agreement, cut ? std::optional<double>(z / sz) : std::nullopt, point);
@@ -323,12 +319,14 @@ BuildSheetGrid(const std::vector<Polyline> & columnsOf,
         // fitted along the window instead and taken at the row, which stays on the turn.
         if (share < 0.5 && !cut && rollAxis != nullptr)
         {
-          if (const auto trend = RollEdgeRowFit(window, columnsOf, c, agreement, z / sz, *rollAxis, sz))
-          {
-            point[0] = rollAxis->Centre[0] + rollAxis->Slope[0] * z + trend->Radius * std::cos(trend->Angle);
-            point[1] = rollAxis->Centre[1] + rollAxis->Slope[1] * z + trend->Radius * std::sin(trend->Angle);
-          }
+          trend = RollEdgeRowFit(window, columnsOf, c, agreement, z / sz, *rollAxis, sz);
         }
+      }
+      if (trend)
+      {
+        const double radius = std::max(0.0, trend->Radius + radialSlope * past);
+        point[0] = rollAxis->Centre[0] + rollAxis->Slope[0] * z + radius * std::cos(trend->Angle);
+        point[1] = rollAxis->Centre[1] + rollAxis->Slope[1] * z + radius * std::sin(trend->Angle);
       }
       mesh.Points[3 * p] = point[0];
       mesh.Points[3 * p + 1] = point[1];
