@@ -36,14 +36,17 @@ namespace itk {
  * eigenvalue stands well above the smallest, or above it and comparable with the largest
  * (a roll spreads its normals across its axis), and the axis lies within 45 degrees of the
  * slice normal; otherwise EstimateFromCentroids(),
- * the least-squares line through the centroids of the middle 60 % of the slices.
+ * the least-squares line through the centroids of the middle 60 % of the slices
+ * (`tensorAxisInReach`, when given, receives the tensor's axis wherever it lies within 45
+ * degrees of the slice normal).
  * Align(): when the axis is tilted from the slice normal by more than `tiltTolerance`
  * degrees, or the in-plane voxels are not square, resamples the box onto a grid whose third
- * axis is the roll axis and whose in-plane voxels are square. Returns true when the axis
- * came from the structure tensor (so the slices now cut straight across it). After a
- * resampling, sheetData marks the voxels that lie inside the original box (1; the others
- * hold no data of the scan); otherwise it is left null.
- * Denoise(): smooths the intensities of a noisy scan for tracing
+ * axis is the roll axis and whose in-plane voxels are square; the centroids' line, refined on
+ * each resampled grid, gives way to the tensor's axis within reach wherever it leaves the
+ * slice normal by more than 45 degrees (the centroids of a short roll's tilted slices move
+ * across it). Returns true when the axis came from the structure tensor (so the slices now cut straight across it).
+ * After a resampling, sheetData marks the voxels that lie inside the original box (1; the others hold no data of the
+ * scan); otherwise it is left null. Denoise(): smooths the intensities of a noisy scan for tracing
  * (SheetIntensityLevels::DenoisingSigma across the sheet, twice that along the roll axis);
  * a clean scan is left as it is.
  * HideOtherSheets(): in a box whose mask marks the sheet 1 and the material of other sheets
@@ -61,7 +64,10 @@ public:
   using AxisType = Vector<double, 3>;
 
   static AxisType
-  Estimate(const SheetImageType * sheetMask, const IntensityImageType * sheetIntensity, bool & fromTensor);
+  Estimate(const SheetImageType *     sheetMask,
+           const IntensityImageType * sheetIntensity,
+           bool &                     fromTensor,
+           AxisType *                 tensorAxisInReach = nullptr);
   static AxisType
   EstimateFromCentroids(const SheetImageType * sheetMask);
   static bool

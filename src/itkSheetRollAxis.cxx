@@ -39,6 +39,10 @@ namespace itk {
 namespace {
 using IntensityImageType = SheetRollAxis::IntensityImageType;
 
+// The largest tilt of the structure tensor's axis from the slice normal that is taken as a
+// roll's axis, in degrees.
+constexpr double LargestTilt = 45.0;
+
 IntensityImageType::Pointer
 GaussianDerivative(const IntensityImageType * input, const IntensityImageType::SpacingType & sigmas, unsigned int d)
 {
@@ -80,7 +84,10 @@ GaussianDerivative(const IntensityImageType * input, const IntensityImageType::S
 } // namespace
 
 SheetRollAxis::AxisType
-SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageType * sheetIntensity, bool & fromTensor)
+SheetRollAxis::Estimate(const SheetImageType *     sheetMask,
+                        const IntensityImageType * sheetIntensity,
+                        bool &                     fromTensor,
+                        AxisType *                 tensorAxisInReach)
 {
   // The sheet does not change along the roll axis: its normals all lie across it, so the
   // axis is the direction of least gradient energy over the sheet (the structure tensor's
@@ -256,7 +263,6 @@ SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageTy
   constexpr double rolledEigenvalueRatio = 2.5;
   constexpr double tiltedEigenvalueRatio = 1.5;
   constexpr double comparableEigenvalues = 0.25;
-  constexpr double largestTilt = 45.0;
   AxisType         tensorAxis, sliceNormal;
   for (unsigned r = 0; r < 3; ++r)
   {
@@ -268,7 +274,11 @@ SheetRollAxis::Estimate(const SheetImageType * sheetMask, const IntensityImageTy
   {
     tensorAxis = -tensorAxis;
   }
-  const bool   tensorInReach = std::abs(cosine) >= std::cos(largestTilt * Math::pi / 180.0);
+  const bool tensorInReach = std::abs(cosine) >= std::cos(LargestTilt * Math::pi / 180.0);
+  if (tensorInReach && tensorAxisInReach != nullptr)
+  {
+    *tensorAxisInReach = tensorAxis;
+  }
   const double smallest = std::max(eigen.get_eigenvalue(0), 0.0), middle = eigen.get_eigenvalue(1);
   if (tensorInReach && middle > 0.0 &&
       (middle > rolledEigenvalueRatio * smallest ||
@@ -368,15 +378,30 @@ SheetRollAxis::Align(SheetImageType::Pointer &     sheetMask,
   };
   const AxisType originalNormal = sliceNormal(originalMask);
   bool           fromTensor = false;
-  AxisType       axis = Estimate(originalMask, originalIntensity, fromTensor);
+  AxisType       tensorAxis{ 0.0 };
+  AxisType       axis = Estimate(originalMask, originalIntensity, fromTensor, &tensorAxis);
+  // The centroids of a short roll's slices (a disc-like roll, cut across its faces by the
+  // slices of a tilt) move across it, not along it: where their line leaves the slice normal
+  // by more than the tensor's reach while the tensor's axis lies within it (its eigenvalues
+  // were too close for a roll only because the radius changes along the axis or the section
+  // is squashed), the tensor's axis is the roll's.
+  auto preferTensor = [&]() {
+    if (!fromTensor && tensorAxis.GetNorm() > 0.0 && angle(axis, originalNormal) > LargestTilt)
+    {
+      axis = tensorAxis;
+      fromTensor = true;
+    }
+  };
+  preferTensor();
   if (angle(axis, originalNormal) <= tiltTolerance && square)
   {
     return fromTensor;
   }
   // Each pass resamples the original box along the current estimate. The structure tensor's
-  // estimate is global and needs one; the centroids' is better from a better aligned grid
-  // (partial slices bias it less), so it converges in a few.
-  for (int pass = 0; pass < 4; ++pass)
+  // estimate is global and needs one (the last, where it replaces the centroids'); the
+  // centroids' is better from a better aligned grid (partial slices bias it less), so it
+  // converges in a few.
+  for (int pass = 0; pass < 4 || fromTensor; ++pass)
   {
     AxisType firstAxis;
     for (unsigned r = 0; r < 3; ++r)
@@ -473,6 +498,7 @@ SheetRollAxis::Align(SheetImageType::Pointer &     sheetMask,
       break;
     }
     axis = refined;
+    preferTensor();
   }
   std::ostringstream text;
   text << "the volume was resampled along the roll axis";

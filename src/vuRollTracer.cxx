@@ -31,6 +31,7 @@
 #include <numeric>
 #include <optional>
 #include <thread>
+#include <utility>
 
 namespace itk {
 namespace RollTracing {
@@ -321,6 +322,39 @@ DisagreeLocally(const Tracer::Trace & a, const Tracer::Trace & b, double pitch, 
   return last - first < longest && first - from >= longest && to - last >= longest;
 }
 
+// The part of `trace` that stays within half a turn spacing of `prior`: all of it where it
+// leaves the prior nowhere or only locally (DisagreeLocally), else the longer of its
+// stretches before the first and after the last place where it leaves it (a trace carried
+// onto the neighbouring turn at a touch, or begun on it there, keeps the part on its own).
+Tracer::Trace
+KeepAgreeing(Tracer::Trace trace, const Tracer::Trace & prior, const Tracer & tracer)
+{
+  const double pitch = tracer.Pitch();
+  const long   first = FirstDisagreement(prior, trace, pitch);
+  if (first < 0 || DisagreeLocally(prior, trace, pitch, first, tracer.Frame().Rays / 8))
+  {
+    return trace;
+  }
+  long last = std::min(trace.Last(), prior.Last());
+  while (last > first && std::abs(trace.At(last) - prior.At(last)) <= 0.5 * pitch)
+  {
+    --last;
+  }
+  if (first - trace.First >= trace.Last() - last)
+  {
+    trace.Rho.resize(static_cast<size_t>(first - trace.First));
+    trace.Confirmed.resize(trace.Rho.size());
+  }
+  else
+  {
+    const auto cut = static_cast<std::ptrdiff_t>(last + 1 - trace.First);
+    trace.Rho.erase(trace.Rho.begin(), trace.Rho.begin() + cut);
+    trace.Confirmed.erase(trace.Confirmed.begin(), trace.Confirmed.begin() + cut);
+    trace.First = last + 1;
+  }
+  return trace;
+}
+
 // A trace that stopped short of its prior's ends (a touch it could not pass, a faint
 // stretch, a streak, the part of a turn outside the field of view) would lose the rest of
 // the roll for every slice after it. It is traced again from the prior's stretch beyond
@@ -353,6 +387,7 @@ ResumeBeyondStops(Tracer::Trace &        trace,
       return false;
     }
     Tracer::Trace piece = tracer.TraceNear(crossings, slice, prior, from, to);
+    piece = piece.Empty() ? piece : KeepAgreeing(std::move(piece), prior, tracer);
     if (piece.Empty() || FirstDisagreement(prior, piece, pitch) >= 0 || FirstDisagreement(trace, piece, pitch) >= 0)
     {
       return false;
@@ -544,6 +579,52 @@ ChooseSeed(const SheetVolumeView &     volume,
   return chosen;
 }
 
+// A slice traced with its neighbour's trace as prior (Tracer::TraceGuided, from the
+// prior's middle). A start at a hard place (a touch where two turns merge, a streak) can
+// stop the follower within a few steps or carry it onto the next turn, and such a trace
+// would be dropped, or be the next slice's prior and lose the roll for every slice after
+// it. Where the trace from the middle covers less than half of the prior or leaves it by
+// half a turn spacing, the middles of the prior's two halves are tried as well, each trace
+// is cut to its part on the prior's turn (KeepAgreeing), and the one that stays on it over
+// the most steps is kept; ResumeBeyondStops then takes up the rest of the roll.
+Tracer::Trace
+TraceGuided(const Tracer & tracer, const SliceCrossings & crossings, size_t slice, const Tracer::Trace & prior)
+{
+  Tracer::Trace trace = tracer.TraceGuided(crossings, slice, prior);
+  if (trace.Empty() || (FirstDisagreement(prior, trace, tracer.Pitch()) < 0 &&
+                        2 * (trace.Last() - trace.First) >= prior.Last() - prior.First))
+  {
+    return trace;
+  }
+  auto agreeing = [&](const Tracer::Trace & t) {
+    long count = 0;
+    for (long m = std::max(t.First, prior.First); m <= std::min(t.Last(), prior.Last()); ++m)
+    {
+      count += std::abs(t.At(m) - prior.At(m)) <= 0.5 * tracer.Pitch() ? 1 : 0;
+    }
+    return count;
+  };
+  trace = KeepAgreeing(std::move(trace), prior, tracer);
+  long       best = agreeing(trace);
+  const long middle = (prior.First + prior.Last()) / 2;
+  for (const auto & [from, to] : { std::make_pair(prior.First, middle), std::make_pair(middle, prior.Last()) })
+  {
+    Tracer::Trace other = tracer.TraceNear(crossings, slice, prior, from, to);
+    if (other.Empty())
+    {
+      continue;
+    }
+    other = KeepAgreeing(std::move(other), prior, tracer);
+    const long count = agreeing(other);
+    if (count > best)
+    {
+      trace = std::move(other);
+      best = count;
+    }
+  }
+  return trace;
+}
+
 // Every slice from the seed outwards in direction `dir` (+1 or -1), each traced with the
 // previous slice's trace as prior; the crossings of a batch of slices found in parallel.
 // `done` counts the slices traced; `report` is called after each batch.
@@ -575,7 +656,7 @@ TraceOutwards(const Tracer &                tracer,
       nullptr);
     for (size_t i = 0; i < slices.size(); ++i)
     {
-      traces[slices[i]] = tracer.TraceGuided(found[i], slices[i], prior);
+      traces[slices[i]] = TraceGuided(tracer, found[i], slices[i], prior);
       if (traces[slices[i]].Empty())
       {
         continue;
