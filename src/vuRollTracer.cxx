@@ -581,18 +581,18 @@ ChooseSeed(const SheetVolumeView &     volume,
 
 // A slice traced with its neighbour's trace as prior (Tracer::TraceGuided, from the
 // prior's middle). A start at a hard place (a touch where two turns merge, a streak) can
-// stop the follower within a few steps or carry it onto the next turn, and such a trace
-// would be dropped, or be the next slice's prior and lose the roll for every slice after
-// it. Where the trace from the middle covers less than half of the prior or leaves it by
-// half a turn spacing, the middles of the prior's two halves are tried as well, each trace
-// is cut to its part on the prior's turn (KeepAgreeing), and the one that stays on it over
-// the most steps is kept; ResumeBeyondStops then takes up the rest of the roll.
+// stop the follower within a few steps both ways, and so short a trace would be the next
+// slice's prior and lose the roll for every slice after it. Where the trace from the middle
+// covers less than half of the prior, the middles of the prior's two halves are tried as
+// well, each trace is cut to its part on the prior's turn (KeepAgreeing), and the one that
+// stays on it over the most steps is kept; ResumeBeyondStops then takes up the rest of the
+// roll. A longer trace that leaves the prior is left to the caller's check (dropped unless
+// it leaves it only locally).
 Tracer::Trace
 TraceGuided(const Tracer & tracer, const SliceCrossings & crossings, size_t slice, const Tracer::Trace & prior)
 {
   Tracer::Trace trace = tracer.TraceGuided(crossings, slice, prior);
-  if (trace.Empty() || (FirstDisagreement(prior, trace, tracer.Pitch()) < 0 &&
-                        2 * (trace.Last() - trace.First) >= prior.Last() - prior.First))
+  if (trace.Empty() || 2 * (trace.Last() - trace.First) >= prior.Last() - prior.First)
   {
     return trace;
   }
