@@ -310,15 +310,24 @@ FirstDisagreement(const Tracer::Trace & a, const Tracer::Trace & b, double pitch
 // begins or ends between the two slices (one turn pushed onto the next over a short arc in
 // one slice and not in the other), not a trace that lost its turn, which stays off it from
 // there on.
-bool
-DisagreeLocally(const Tracer::Trace & a, const Tracer::Trace & b, double pitch, long first, long longest)
+// Last angular index at which two traces differ by more than half the turn spacing, given
+// the first (FirstDisagreement, >= 0): scanned back from the end of their overlap.
+long
+LastDisagreement(const Tracer::Trace & a, const Tracer::Trace & b, double pitch, long first)
 {
-  const long from = std::max(a.First, b.First), to = std::min(a.Last(), b.Last());
-  long       last = to;
+  long last = std::min(a.Last(), b.Last());
   while (last > first && std::abs(a.At(last) - b.At(last)) <= 0.5 * pitch)
   {
     --last;
   }
+  return last;
+}
+
+bool
+DisagreeLocally(const Tracer::Trace & a, const Tracer::Trace & b, double pitch, long first, long longest)
+{
+  const long from = std::max(a.First, b.First), to = std::min(a.Last(), b.Last());
+  const long last = LastDisagreement(a, b, pitch, first);
   return last - first < longest && first - from >= longest && to - last >= longest;
 }
 
@@ -335,11 +344,7 @@ KeepAgreeing(Tracer::Trace trace, const Tracer::Trace & prior, const Tracer & tr
   {
     return trace;
   }
-  long last = std::min(trace.Last(), prior.Last());
-  while (last > first && std::abs(trace.At(last) - prior.At(last)) <= 0.5 * pitch)
-  {
-    --last;
-  }
+  const long last = LastDisagreement(prior, trace, pitch, first);
   if (first - trace.First >= trace.Last() - last)
   {
     trace.Rho.resize(static_cast<size_t>(first - trace.First));
