@@ -190,7 +190,12 @@ EstimateSheetIntensityLevels(std::vector<float> air, std::vector<float> material
  * median, until the midpoint settles (Ridler and Calvard's iterative selection, with
  * medians). On a smoothed noisy scan it finds the levels that a threshold near the air's
  * level (Otsu's, when the sheet is a small share of the voxels) hides: the material side of
- * such a threshold is mostly noise. The noise is kept from `levels`. */
+ * such a threshold is mostly noise. The selection settles on the fixed point nearest its
+ * start, which from levels inside the air's noise can split that noise in two; such a split
+ * (levels less than three of the lower class's noise widths apart, their midpoint within
+ * two noise widths of the sample's median) is replaced by the sample's median as the air's
+ * level and the median of what lies four noise widths above it as the sheet's, when that
+ * is at least 0.1 % of the sample. The noise is kept from `levels`. */
 VirtualUnwrapping_EXPORT SheetIntensityLevels
 RefineSheetIntensityLevels(const std::vector<float> & values, SheetIntensityLevels levels);
 

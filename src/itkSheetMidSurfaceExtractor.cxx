@@ -94,8 +94,10 @@ EstimateSheetIntensityLevels(std::vector<float> air, std::vector<float> material
   return levels;
 }
 
+namespace {
+// Ridler and Calvard's iterative selection with medians, started from `levels`.
 SheetIntensityLevels
-RefineSheetIntensityLevels(const std::vector<float> & values, SheetIntensityLevels levels)
+IterativeSelection(const std::vector<float> & values, SheetIntensityLevels levels)
 {
   std::vector<float> air, sheet;
   for (int pass = 0; pass < 30 && levels.Sheet > levels.Air; ++pass)
@@ -125,6 +127,52 @@ RefineSheetIntensityLevels(const std::vector<float> & values, SheetIntensityLeve
       break;
     }
   }
+  return levels;
+}
+
+// The value at `fraction` of the way up `values` (reordered).
+double
+Quantile(std::vector<float> & values, double fraction)
+{
+  const auto at = values.begin() + static_cast<std::ptrdiff_t>(fraction * static_cast<double>(values.size() - 1));
+  std::nth_element(values.begin(), at, values.end());
+  return static_cast<double>(*at);
+}
+} // namespace
+
+SheetIntensityLevels
+RefineSheetIntensityLevels(const std::vector<float> & values, SheetIntensityLevels levels)
+{
+  levels = IterativeSelection(values, levels);
+  if (values.size() < 100 || !(levels.Sheet > levels.Air))
+  {
+    return levels;
+  }
+  // The selection settles on the fixed point nearest its start. Started inside the air's
+  // noise (by a threshold there) on a scan whose sheet is a small share of the voxels, it
+  // splits that noise in two: its levels then lie less than three of the lower class's
+  // noise widths apart, and their midpoint within two of the sample's noise widths of its
+  // median. The sheet being a small share, the sample's median and lower half are the
+  // air's, and what lies four noise widths above the median is the sheet's.
+  const double       midpoint = 0.5 * (levels.Air + levels.Sheet);
+  std::vector<float> lower, sample(values);
+  std::copy_if(values.begin(), values.end(), std::back_inserter(lower), [midpoint](float v) { return v < midpoint; });
+  const double lowerNoise = lower.empty() ? 0.0 : Quantile(lower, 0.5) - Quantile(lower, 0.1587);
+  const double median = Quantile(sample, 0.5);
+  const double noise = median - Quantile(sample, 0.1587);
+  if (!(levels.Sheet - levels.Air < 3.0 * lowerNoise && midpoint < median + 2.0 * noise))
+  {
+    return levels;
+  }
+  std::vector<float> sheet;
+  std::copy_if(
+    values.begin(), values.end(), std::back_inserter(sheet), [&](float v) { return v > median + 4.0 * noise; });
+  if (sheet.size() * 1000 < values.size())
+  {
+    return levels;
+  }
+  levels.Air = median;
+  levels.Sheet = Quantile(sheet, 0.5);
   return levels;
 }
 

@@ -22,6 +22,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
+#include <string>
+#include <vector>
 
 namespace {
 constexpr double Pi = 3.14159265358979323846;
@@ -542,6 +545,48 @@ TEST(SheetMidSurfaceExtractor, OffSheetRunsNameAMeshTracedBetweenTurns)
   auto                       beyondTheScan = view;
   beyondTheScan.Data = noData.data();
   EXPECT_TRUE(itk::SheetMidSurfaceExtractor::FindOffSheetRuns(moved(3.0), beyondTheScan, 0.0, 1.0).empty());
+}
+
+// A smoothed noisy scan whose sheet is a small share of the voxels, its levels estimated
+// on either side of a threshold inside the air's noise (where Otsu's falls): the refined
+// levels put their midpoint between the air's noise and the sheet, where the iterative
+// selection alone settles on a split of the air's noise (midpoint within 0.1 noise widths
+// of the air). Shares, contrasts and noise drawn each run; with a larger share, from a good
+// start, the levels stay apart (midpoint 1.5 to 4 noise widths above the air).
+TEST(SheetMidSurfaceExtractor, IntensityLevelsOfASmallSheetAreNotASplitOfTheAirsNoise)
+{
+  const unsigned int seed = std::random_device{}();
+  std::mt19937       random(seed);
+  SCOPED_TRACE("seed " + std::to_string(seed));
+  for (int trial = 0; trial < 8; ++trial)
+  {
+    const bool                             small = trial % 2 == 0;
+    const double                           share = small ? std::uniform_real_distribution<double>(0.015, 0.08)(random)
+                                                         : std::uniform_real_distribution<double>(0.1, 0.45)(random);
+    const double                           noise = std::uniform_real_distribution<double>(20.0, 80.0)(random);
+    const double                           contrast = noise * std::uniform_real_distribution<double>(5.0, 10.0)(random);
+    const double                           air = -1000.0;
+    std::normal_distribution<double>       gauss(0.0, noise);
+    std::uniform_real_distribution<double> partial(0.3, 1.0);
+    std::vector<float>                     values(200000);
+    for (size_t i = 0; i < values.size(); ++i)
+    {
+      const bool onSheet = static_cast<double>(i) < share * static_cast<double>(values.size());
+      values[i] = static_cast<float>(air + (onSheet ? contrast * partial(random) : 0.0) + gauss(random));
+    }
+    itk::SheetIntensityLevels start;
+    start.Air = air - 0.6 * noise;
+    start.Sheet = small ? air + 0.7 * noise : air + 0.6 * contrast;
+    start.Noise = 3.0 * noise;
+    const itk::SheetIntensityLevels found = itk::RefineSheetIntensityLevels(values, start);
+    const double                    midpoint = 0.5 * (found.Air + found.Sheet);
+    SCOPED_TRACE("trial " + std::to_string(trial) + ": share " + std::to_string(share) + ", contrast " +
+                 std::to_string(contrast / noise) + " noise widths");
+    EXPECT_GT(midpoint, air + (small ? 2.0 : 1.2) * noise);
+    EXPECT_LT(midpoint, air + 0.8 * contrast);
+    EXPECT_NEAR(found.Air, air, small ? 0.5 * noise : 1.5 * noise);
+    EXPECT_EQ(found.Noise, start.Noise);
+  }
 }
 
 TEST(SheetMidSurfaceExtractor, ProgressCallbackAborts)
