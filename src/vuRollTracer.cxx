@@ -499,7 +499,9 @@ TraceSeed(const SheetVolumeView &     volume,
   };
   traceAtOffset(0.0, 0.0);
   // The centroid line need not pass through the spiral's centre (an irregular roll, a field
-  // of view that cuts it): re-centre on the innermost turn and trace again.
+  // of view that cuts it): re-centre on the innermost turn and trace again. The innermost
+  // turn's own centre can lie off the spiral's (a squashed or irregular inner turn): a
+  // re-centred trace that passes through clearly fewer of its crossings is undone.
   for (int pass = 0; pass < 2 && !result.Trace.Empty(); ++pass)
   {
     const Tracer::Trace & trace = result.Trace;
@@ -519,7 +521,14 @@ TraceSeed(const SheetVolumeView &     volume,
     {
       break;
     }
-    traceAtOffset(tracer.GetOffset()[0] + mean[0], tracer.GetOffset()[1] + mean[1]);
+    const double before[2] = { tracer.GetOffset()[0], tracer.GetOffset()[1] };
+    const double explained = tracer.Explained(result.Crossings, result.Trace);
+    traceAtOffset(before[0] + mean[0], before[1] + mean[1]);
+    if (result.Trace.Empty() || tracer.Explained(result.Crossings, result.Trace) < explained - SeedPreference)
+    {
+      traceAtOffset(before[0], before[1]);
+      break;
+    }
   }
   return result;
 }
