@@ -195,7 +195,8 @@ EstimateSheetIntensityLevels(std::vector<float> air, std::vector<float> material
  * (levels less than three of the lower class's noise widths apart, their midpoint within
  * two noise widths of the sample's median) is replaced by the sample's median as the air's
  * level and the median of what lies four noise widths above it as the sheet's, when that
- * is at least 0.1 % of the sample. The noise is kept from `levels`. */
+ * is at least 0.1 % of the sample. Padding (the smallest value, when 1 % of the sample or
+ * more holds it) is left out throughout. The noise is kept from `levels`. */
 VirtualUnwrapping_EXPORT SheetIntensityLevels
 RefineSheetIntensityLevels(const std::vector<float> & values, SheetIntensityLevels levels);
 

@@ -143,8 +143,19 @@ Quantile(std::vector<float> & values, double fraction)
 SheetIntensityLevels
 RefineSheetIntensityLevels(const std::vector<float> & values, SheetIntensityLevels levels)
 {
-  levels = IterativeSelection(values, levels);
-  if (values.size() < 100 || !(levels.Sheet > levels.Air))
+  if (values.empty())
+  {
+    return levels;
+  }
+  // Padding outside a scanner's field of view (the smallest value, held by 1 % of the
+  // sample or more) is neither air nor sheet: left out.
+  const float floor = *std::min_element(values.begin(), values.end());
+  const bool  padded = static_cast<size_t>(std::count(values.begin(), values.end(), floor)) * 100 >= values.size();
+  std::vector<float> sample;
+  std::copy_if(
+    values.begin(), values.end(), std::back_inserter(sample), [&](float v) { return !padded || v != floor; });
+  levels = IterativeSelection(sample, levels);
+  if (sample.size() < 100 || !(levels.Sheet > levels.Air))
   {
     return levels;
   }
@@ -155,8 +166,8 @@ RefineSheetIntensityLevels(const std::vector<float> & values, SheetIntensityLeve
   // median. The sheet being a small share, the sample's median and lower half are the
   // air's, and what lies four noise widths above the median is the sheet's.
   const double       midpoint = 0.5 * (levels.Air + levels.Sheet);
-  std::vector<float> lower, sample(values);
-  std::copy_if(values.begin(), values.end(), std::back_inserter(lower), [midpoint](float v) { return v < midpoint; });
+  std::vector<float> lower;
+  std::copy_if(sample.begin(), sample.end(), std::back_inserter(lower), [midpoint](float v) { return v < midpoint; });
   const double lowerNoise = lower.empty() ? 0.0 : Quantile(lower, 0.5) - Quantile(lower, 0.1587);
   const double median = Quantile(sample, 0.5);
   const double noise = median - Quantile(sample, 0.1587);
@@ -166,8 +177,8 @@ RefineSheetIntensityLevels(const std::vector<float> & values, SheetIntensityLeve
   }
   std::vector<float> sheet;
   std::copy_if(
-    values.begin(), values.end(), std::back_inserter(sheet), [&](float v) { return v > median + 4.0 * noise; });
-  if (sheet.size() * 1000 < values.size())
+    sample.begin(), sample.end(), std::back_inserter(sheet), [&](float v) { return v > median + 4.0 * noise; });
+  if (sheet.size() * 1000 < sample.size())
   {
     return levels;
   }

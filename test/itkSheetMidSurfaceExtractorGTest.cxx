@@ -551,8 +551,10 @@ TEST(SheetMidSurfaceExtractor, OffSheetRunsNameAMeshTracedBetweenTurns)
 // on either side of a threshold inside the air's noise (where Otsu's falls): the refined
 // levels put their midpoint between the air's noise and the sheet, where the iterative
 // selection alone settles on a split of the air's noise (midpoint within 0.1 noise widths
-// of the air). Shares, contrasts and noise drawn each run; with a larger share, from a good
-// start, the levels stay apart (midpoint 1.5 to 4 noise widths above the air).
+// of the air). Shares, contrasts and noise drawn each run, half of the samples with padding
+// (a constant far below the air, as outside a scanner's field of view, which would make
+// the air's noise seem wide); with a larger share, from a good start, the levels stay apart
+// (midpoint 1.5 to 4 noise widths above the air).
 TEST(SheetMidSurfaceExtractor, IntensityLevelsOfASmallSheetAreNotASplitOfTheAirsNoise)
 {
   const unsigned int seed = std::random_device{}();
@@ -568,11 +570,17 @@ TEST(SheetMidSurfaceExtractor, IntensityLevelsOfASmallSheetAreNotASplitOfTheAirs
     const double                           air = -1000.0;
     std::normal_distribution<double>       gauss(0.0, noise);
     std::uniform_real_distribution<double> partial(0.3, 1.0);
-    std::vector<float>                     values(200000);
+    // From the fifth trial on, a fifth to a third of the voxels are padding outside the
+    // scanner's field of view, well below the air.
+    const double       padding = trial < 4 ? 0.0 : std::uniform_real_distribution<double>(0.2, 0.33)(random);
+    std::vector<float> values(200000);
     for (size_t i = 0; i < values.size(); ++i)
     {
-      const bool onSheet = static_cast<double>(i) < share * static_cast<double>(values.size());
-      values[i] = static_cast<float>(air + (onSheet ? contrast * partial(random) : 0.0) + gauss(random));
+      const double place = static_cast<double>(i) / static_cast<double>(values.size());
+      const bool   onSheet = place < share * (1.0 - padding);
+      values[i] = place >= 1.0 - padding
+                    ? static_cast<float>(air - 12.0 * noise)
+                    : static_cast<float>(air + (onSheet ? contrast * partial(random) : 0.0) + gauss(random));
     }
     itk::SheetIntensityLevels start;
     start.Air = air - 0.6 * noise;
