@@ -71,6 +71,17 @@ SheetIntensityLevels::DenoisingSigma() const
   return snr >= 12.0 ? 0.0 : std::clamp(3.0 / snr, 0.5, 1.0);
 }
 
+namespace {
+// The value at `fraction` of the way up `values` (reordered).
+double
+Quantile(std::vector<float> & values, double fraction)
+{
+  const auto at = values.begin() + static_cast<std::ptrdiff_t>(fraction * static_cast<double>(values.size() - 1));
+  std::nth_element(values.begin(), at, values.end());
+  return static_cast<double>(*at);
+}
+} // namespace
+
 SheetIntensityLevels
 EstimateSheetIntensityLevels(std::vector<float> air, std::vector<float> material)
 {
@@ -80,16 +91,11 @@ EstimateSheetIntensityLevels(std::vector<float> air, std::vector<float> material
     const float floor = *std::min_element(air.begin(), air.end());
     air.erase(std::remove(air.begin(), air.end(), floor), air.end());
   }
-  auto at = [](std::vector<float> & values, double fraction) {
-    const auto i = values.begin() + static_cast<std::ptrdiff_t>(fraction * static_cast<double>(values.size() - 1));
-    std::nth_element(values.begin(), i, values.end());
-    return static_cast<double>(*i);
-  };
   if (air.size() >= 16 && !material.empty())
   {
-    levels.Air = at(air, 0.5);
-    levels.Noise = levels.Air - at(air, 0.1587);
-    levels.Sheet = at(material, 0.5);
+    levels.Air = Quantile(air, 0.5);
+    levels.Noise = levels.Air - Quantile(air, 0.1587);
+    levels.Sheet = Quantile(material, 0.5);
   }
   return levels;
 }
@@ -128,15 +134,6 @@ IterativeSelection(const std::vector<float> & values, SheetIntensityLevels level
     }
   }
   return levels;
-}
-
-// The value at `fraction` of the way up `values` (reordered).
-double
-Quantile(std::vector<float> & values, double fraction)
-{
-  const auto at = values.begin() + static_cast<std::ptrdiff_t>(fraction * static_cast<double>(values.size() - 1));
-  std::nth_element(values.begin(), at, values.end());
-  return static_cast<double>(*at);
 }
 } // namespace
 
