@@ -42,6 +42,13 @@ using IntensityImageType = SheetRollAxis::IntensityImageType;
 // The largest tilt of the structure tensor's axis from the slice normal that is taken as a
 // roll's axis, in degrees.
 constexpr double LargestTilt = 45.0;
+// The middle eigenvalue of the structure tensor at or below this many times the smallest:
+// no spread of the normals across the tensor's axis (a flat sheet), which then says nothing
+// of a roll's axis.
+constexpr double SpreadEigenvalueRatio = 1.25;
+// Degrees by which the centroids' line may leave the tensor's axis (where that shows some
+// spread of the normals) before the tensor's axis is taken.
+constexpr double LargestDisagreement = 2.0;
 
 IntensityImageType::Pointer
 GaussianDerivative(const IntensityImageType * input, const IntensityImageType::SpacingType & sigmas, unsigned int d)
@@ -87,7 +94,8 @@ SheetRollAxis::AxisType
 SheetRollAxis::Estimate(const SheetImageType *     sheetMask,
                         const IntensityImageType * sheetIntensity,
                         bool &                     fromTensor,
-                        AxisType *                 tensorAxisInReach)
+                        AxisType *                 tensorAxisInReach,
+                        double *                   tensorSpread)
 {
   // The sheet does not change along the roll axis: its normals all lie across it, so the
   // axis is the direction of least gradient energy over the sheet (the structure tensor's
@@ -274,12 +282,16 @@ SheetRollAxis::Estimate(const SheetImageType *     sheetMask,
   {
     tensorAxis = -tensorAxis;
   }
-  const bool tensorInReach = std::abs(cosine) >= std::cos(LargestTilt * Math::pi / 180.0);
+  const bool   tensorInReach = std::abs(cosine) >= std::cos(LargestTilt * Math::pi / 180.0);
+  const double smallest = std::max(eigen.get_eigenvalue(0), 0.0), middle = eigen.get_eigenvalue(1);
   if (tensorInReach && tensorAxisInReach != nullptr)
   {
     *tensorAxisInReach = tensorAxis;
   }
-  const double smallest = std::max(eigen.get_eigenvalue(0), 0.0), middle = eigen.get_eigenvalue(1);
+  if (tensorSpread != nullptr)
+  {
+    *tensorSpread = smallest > 0.0 ? middle / smallest : std::numeric_limits<double>::infinity();
+  }
   if (tensorInReach && middle > 0.0 &&
       (middle > rolledEigenvalueRatio * smallest ||
        (middle > tiltedEigenvalueRatio * smallest && middle > comparableEigenvalues * eigen.get_eigenvalue(2))))
@@ -379,14 +391,19 @@ SheetRollAxis::Align(SheetImageType::Pointer &     sheetMask,
   const AxisType originalNormal = sliceNormal(originalMask);
   bool           fromTensor = false;
   AxisType       tensorAxis{ 0.0 };
-  AxisType       axis = Estimate(originalMask, originalIntensity, fromTensor, &tensorAxis);
+  double         spread = 0.0;
+  AxisType       axis = Estimate(originalMask, originalIntensity, fromTensor, &tensorAxis, &spread);
   // The centroids of a short roll's slices (a disc-like roll, cut across its faces by the
   // slices of a tilt) move across it, not along it: where their line leaves the slice normal
-  // by more than the tensor's reach while the tensor's axis lies within it (its eigenvalues
-  // were too close for a roll only because the radius changes along the axis or the section
-  // is squashed), the tensor's axis is the roll's.
+  // by more than the tensor's reach while the tensor's axis lies within it, or leaves the
+  // tensor's axis by more than a few degrees (its eigenvalues were too close for a roll only
+  // because the radius changes along the axis or the section is squashed, but show a spread
+  // of the normals across it), the tensor's axis is the roll's. Refined on the resampled
+  // grids, a short roll's centroids' line can also drift away from a good first estimate.
   auto preferTensor = [&]() {
-    if (!fromTensor && tensorAxis.GetNorm() > 0.0 && angle(axis, originalNormal) > LargestTilt)
+    const double apart = std::acos(std::min(std::abs(axis * tensorAxis), 1.0)) * 180.0 / Math::pi;
+    if (!fromTensor && tensorAxis.GetNorm() > 0.0 &&
+        (angle(axis, originalNormal) > LargestTilt || (spread > SpreadEigenvalueRatio && apart > LargestDisagreement)))
     {
       axis = tensorAxis;
       fromTensor = true;

@@ -196,6 +196,7 @@ Tracer::NearestCrossing(const std::vector<Crossing> & list,
                         double                        below,
                         double                        bump,
                         double                        ahead,
+                        double                        side,
                         double &                      sheet) const
 {
   const double voxel = m_Settings.Voxel;
@@ -250,9 +251,29 @@ Tracer::NearestCrossing(const std::vector<Crossing> & list,
       sheet = (before ? below : ahead) < target ? crossing.OuterHalf : crossing.InnerHalf;
     }
   }
+  const auto circlingAt = [&](double r) {
+    return (std::isfinite(below) && std::abs(r - below) < apart) || (std::isfinite(bump) && std::abs(r - bump) < apart);
+  };
+  bool circling = circlingAt(sheet);
+  if (circling && crossing.Band() && std::isfinite(below) && !std::isfinite(bump) &&
+      std::max(crossing.Width / m_Width, crossing.Mass / m_Mass) < 2.5)
+  {
+    // A band of two sheets (not three) whose sheet nearest the prediction is the turn before:
+    // where two turns touch, the prediction (from a neighbouring slice's trace, or the turns
+    // before) can fall on the turn before, and the step would be refused and the prediction
+    // carried through, onto the turn before, in this slice and in every slice it guides. The
+    // band's other sheet, beyond the turn before on this turn's side of it, is this turn's.
+    // Pressed together, the two sheets' middles lie closer than Apart(): the band's own
+    // sheets are compared instead.
+    const double other = side > 0.0 ? crossing.Outer : crossing.Inner;
+    const double separation = crossing.Outer - crossing.Inner;
+    if (side != 0.0 && other != sheet && (other - below) * side > 0.0 && std::abs(sheet - below) < 0.25 * separation)
+    {
+      sheet = other;
+      circling = false;
+    }
+  }
   const bool near = bestDistance < window && (guide != nullptr || std::abs(sheet - lastCarried) < window);
-  const bool circling = (std::isfinite(below) && std::abs(sheet - below) < apart) ||
-                        (std::isfinite(bump) && std::abs(sheet - bump) < apart);
   return near && !circling ? best : list.size();
 }
 
@@ -420,10 +441,13 @@ Tracer::Follow(const SliceCrossings &    crossings,
     // The next turn where the neighbouring slice predicts it.
     const double ahead = guided && prior->Covers(m + dir * m_Frame.Rays) ? prior->At(m + dir * m_Frame.Rays) + offset
                                                                          : std::numeric_limits<double>::quiet_NaN();
+    // The side of the turn before on which this turn lies (the sign of the distance learnt
+    // from it, or of the next turn's from it; 0 while neither is known).
+    const double side = turnKnown ? turnOffset : std::isfinite(ahead) && std::isfinite(below) ? ahead - below : 0.0;
     // The crossing accepted near a prediction (NearestCrossing), and the radius of its sheet.
     double sheet = 0.0;
     auto   accept = [&](double target) {
-      return NearestCrossing(list, target, guided ? prior : nullptr, m, lastCarried, below, bump, ahead, sheet);
+      return NearestCrossing(list, target, guided ? prior : nullptr, m, lastCarried, below, bump, ahead, side, sheet);
     };
     size_t best = accept(predicted);
     if (best == list.size() && !guided && turnKnown && std::isfinite(below))

@@ -330,7 +330,10 @@ public:
   // one revolution before (`below`, or its `bump` at a touch): the trace would circle.
   // `sheet`: the radius of its sheet nearest the target (a band of touching turns: its inner
   // or outer sheet; a crossing heavier than one sheet that also holds the turn before or
-  // the next turn (`ahead`, predicted; NaN where unknown): its half on this turn's side).
+  // the next turn (`ahead`, predicted; NaN where unknown): its half on this turn's side;
+  // a band of two sheets whose sheet nearest the target is the turn before: its other sheet,
+  // when it lies beyond the turn before on this turn's `side` of it (> 0 outwards, < 0
+  // inwards, 0 unknown)).
   size_t
   NearestCrossing(const std::vector<Crossing> & list,
                   double                        target,
@@ -340,6 +343,7 @@ public:
                   double                        below,
                   double                        bump,
                   double                        ahead,
+                  double                        side,
                   double &                      sheet) const;
 
   // Updates what Follow() has learnt with a confirmed step at radius r: the distances to the
