@@ -401,7 +401,8 @@ SheetRollAxis::Align(SheetImageType::Pointer &     sheetMask,
   // of the normals across it), the tensor's axis is the roll's. Refined on the resampled
   // grids, a short roll's centroids' line can also drift away from a good first estimate.
   auto preferTensor = [&]() {
-    const double apart = std::acos(std::min(std::abs(axis * tensorAxis), 1.0)) * 180.0 / Math::pi;
+    // Between the two lines, whichever way each points.
+    const double apart = std::min(angle(axis, tensorAxis), 180.0 - angle(axis, tensorAxis));
     if (!fromTensor && tensorAxis.GetNorm() > 0.0 &&
         (angle(axis, originalNormal) > LargestTilt || (spread > SpreadEigenvalueRatio && apart > LargestDisagreement)))
     {

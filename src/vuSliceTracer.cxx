@@ -255,7 +255,7 @@ Tracer::NearestCrossing(const std::vector<Crossing> & list,
     return (std::isfinite(below) && std::abs(r - below) < apart) || (std::isfinite(bump) && std::abs(r - bump) < apart);
   };
   bool circling = circlingAt(sheet);
-  if (circling && crossing.Band() && std::isfinite(below) && !std::isfinite(bump) &&
+  if (circling && crossing.Band() && !std::isfinite(bump) &&
       std::max(crossing.Width / m_Width, crossing.Mass / m_Mass) < 2.5)
   {
     // A band of two sheets (not three) whose sheet nearest the prediction is the turn before:
