@@ -500,8 +500,18 @@ Tracer::Follow(const SliceCrossings &    crossings,
       {
         break;
       }
-      steps.push_back({ m, predicted, false });
-      radiusAt.back() = predicted;
+      // Out of the field of view the neighbouring slice's trace carries the turn. Where it
+      // has come closer to the turn before than CarriedDistance of the distance learnt
+      // between them (it followed the edge of the data inwards, slice after slice, where
+      // the edge cut the turn), the turn before carries it at the learnt distance: turns
+      // do not close up where nothing of them is seen.
+      double carried = predicted;
+      if (outside && guided && turnKnown && std::isfinite(below) && (predicted - below) / turnOffset < CarriedDistance)
+      {
+        carried = model.FromTurns(below, far);
+      }
+      steps.push_back({ m, carried, false });
+      radiusAt.back() = carried;
     }
     else
     {

@@ -62,6 +62,9 @@ constexpr double PathAirArc = 4.0;
 constexpr long AloneRays = 8;
 // Voxels from the edge of the scan's data within which the intensities are not trusted.
 constexpr long DataMargin = 3;
+// A turn carried through a stretch out of the field of view keeps at least this fraction of
+// its learnt distance from the turn before.
+constexpr double CarriedDistance = 0.6;
 
 // Least-squares line y = intercept + slope x through the points added.
 struct LineFit
