@@ -500,15 +500,16 @@ Tracer::Follow(const SliceCrossings &    crossings,
       {
         break;
       }
-      // Out of the field of view the neighbouring slice's trace carries the turn. Where it
-      // has come closer to the turn before than CarriedDistance of the distance learnt
-      // between them (it followed the edge of the data inwards, slice after slice, where
-      // the edge cut the turn), the turn before carries it at the learnt distance: turns
-      // do not close up where nothing of them is seen.
+      // Out of the field of view the neighbouring slice's trace carries the turn, but no
+      // closer to the turn before than CarriedDistance of the distance learnt between them:
+      // where the edge of the data cut the turn, the neighbours' traces followed that edge
+      // inwards, slice after slice. Turns do not close up where nothing of them is seen;
+      // they are not moved further either (the learnt distance need not hold far from
+      // where it was learnt).
       double carried = predicted;
       if (outside && guided && turnKnown && std::isfinite(below) && (predicted - below) / turnOffset < CarriedDistance)
       {
-        carried = model.FromTurns(below, far);
+        carried = below + CarriedDistance * turnOffset;
       }
       steps.push_back({ m, carried, false });
       radiusAt.back() = carried;
