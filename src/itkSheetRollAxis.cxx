@@ -402,7 +402,8 @@ SheetRollAxis::Align(SheetImageType::Pointer &     sheetMask,
   // grids, a short roll's centroids' line can also drift away from a good first estimate.
   auto preferTensor = [&]() {
     // Between the two lines, whichever way each points.
-    const double apart = std::min(angle(axis, tensorAxis), 180.0 - angle(axis, tensorAxis));
+    const double between = angle(axis, tensorAxis);
+    const double apart = std::min(between, 180.0 - between);
     if (!fromTensor && tensorAxis.GetNorm() > 0.0 &&
         (angle(axis, originalNormal) > LargestTilt || (spread > SpreadEigenvalueRatio && apart > LargestDisagreement)))
     {
