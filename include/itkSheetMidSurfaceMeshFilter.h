@@ -60,7 +60,8 @@ namespace itk {
  * about 45 degrees are handled).
  * Every sheet (EverySheet, off by default): the pieces are taken from the largest down.
  * Each becomes a sheet, together with the smaller pieces in its box that trace with it as
- * one roll (the arcs of its turns cut by the field of view); a piece whose area (voxels
+ * one roll (the arcs of its turns cut by the field of view: it and they reach the scan's
+ * edge); a piece whose area (voxels
  * times voxel volume over the first sheet's measured thickness) is below
  * MinimumSheetArea (mm^2; 0: automatic, 1 % of the first sheet's area and at least 400
  * in-plane voxels) is counted as too small, one that cannot be traced is dropped with the
@@ -259,6 +260,9 @@ private:
    * the field of view), as a fraction of the largest piece: the arc of a cut turn, not a
    * speck of noise. */
   static constexpr double CutArcFraction = 0.002;
+  /** A piece whose box comes within this many voxels of a face of the scan reaches its edge
+   * (may be cut by the field of view). */
+  static constexpr IndexValueType CutEdgeReach = 2;
   /** Automatic minimum sheet area: this fraction of the first sheet's area, and at least
    * this many in-plane voxels. */
   static constexpr double AutomaticMinimumAreaFraction = 0.01;
@@ -299,7 +303,8 @@ private:
              const std::vector<uint8_t> & keep,
              std::vector<std::string> &   warnings);
   /** The sheet made from piece `first`: with the smaller pieces in its box that trace with it
-   * as one roll (CutArcFraction of its size at least), or alone. */
+   * as one roll (CutArcFraction of its size at least; it and they reaching the scan's edge,
+   * where the field of view cut them apart), or alone. */
   Sheet
   MeshSheetFrom(Pieces & pieces, SizeValueType first, std::vector<std::string> & warnings);
   /** A piece that is not a roll may hold sheets that touch (pages stuck together): split

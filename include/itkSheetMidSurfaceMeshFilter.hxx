@@ -304,13 +304,30 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::MeshSheetFrom(Pieces &      
   std::vector<uint8_t> group(pieces.Objects + 1, 0);
   group[first] = 1;
   SizeValueType grouped = 1;
-  for (SizeValueType l = first + 1; l <= pieces.Objects; ++l)
+  // The field of view cuts a roll's turns where they leave the scan, so every piece of a cut
+  // roll (its inner part too) reaches the scan's edge. Pages that lie apart within the scan
+  // do not: two parallel sheets, around the middle of the gap between them, can otherwise
+  // trace as a turn of a roll.
+  const ImageRegion<3> scan = pieces.Labels->GetBufferedRegion();
+  const auto           reachesEdge = [&scan](const ImageRegion<3> & box) {
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      if (box.GetIndex(d) <= scan.GetIndex(d) + CutEdgeReach ||
+          box.GetUpperIndex()[d] >= scan.GetUpperIndex()[d] - CutEdgeReach)
+      {
+        return true;
+      }
+    }
+    return false;
+  };
+  const bool cut = reachesEdge(firstBox);
+  for (SizeValueType l = first + 1; cut && l <= pieces.Objects; ++l)
   {
     // An arc of a cut turn, not a speck of noise within the roll's box.
     auto       box = pieces.Boxes[l];
     const bool arc =
       static_cast<double>(pieces.Sizes[l - 1]) >= CutArcFraction * static_cast<double>(pieces.Sizes[first - 1]);
-    group[l] = pieces.Done[l] == 0 && arc && box.Crop(firstBox) ? 1 : 0;
+    group[l] = pieces.Done[l] == 0 && arc && reachesEdge(box) && box.Crop(firstBox) ? 1 : 0;
     grouped += group[l];
   }
   if (grouped > 1 && m_Method != SheetSurfaceMethodEnum::General)
