@@ -39,16 +39,21 @@ namespace itk {
  * the least-squares line through the centroids of the middle 60 % of the slices
  * (`tensorAxisInReach`, when given, receives the tensor's axis wherever it lies within 45
  * degrees of the slice normal; `tensorSpread` the ratio of the middle eigenvalue to the
- * smallest: how far the normals spread across that axis).
+ * smallest: how far the normals spread across that axis; `flatSheetNormal` the tensor's
+ * largest eigenvector where the middle eigenvalue is below 0.15 of it (the normals all
+ * near one direction: a flat or gently curved sheet), else zero).
  * Align(): when the axis is tilted from the slice normal by more than `tiltTolerance`
  * degrees, or the in-plane voxels are not square, resamples the box onto a grid whose third
  * axis is the roll axis and whose in-plane voxels are square; the centroids' line, refined on
  * each resampled grid, gives way to the tensor's axis within reach wherever it leaves the
  * slice normal by more than 45 degrees, or that axis by more than 2 where the tensor shows a
  * spread of the normals across it (the centroids of a short roll's tilted slices move across
- * it). Returns true when the axis came from the structure tensor (so the slices now cut straight across it).
- * After a resampling, sheetData marks the voxels that lie inside the original box (1; the others hold no data of the
- * scan); otherwise it is left null. Denoise(): smooths the intensities of a noisy scan for tracing
+ * it). A flat or gently curved sheet whose axis is not the tensor's takes the direction in
+ * its plane nearest the slice normal, where that lies within 45 degrees of it. Returns true
+ * when the axis came from the structure tensor (so the slices now cut straight across it).
+ * After a resampling, sheetData marks the voxels that lie inside the original box (1; the
+ * others hold no data of the scan); otherwise it is left null.
+ * Denoise(): smooths the intensities of a noisy scan for tracing
  * (SheetIntensityLevels::DenoisingSigma across the sheet, twice that along the roll axis);
  * a clean scan is left as it is.
  * HideOtherSheets(): in a box whose mask marks the sheet 1 and the material of other sheets
@@ -70,7 +75,8 @@ public:
            const IntensityImageType * sheetIntensity,
            bool &                     fromTensor,
            AxisType *                 tensorAxisInReach = nullptr,
-           double *                   tensorSpread = nullptr);
+           double *                   tensorSpread = nullptr,
+           AxisType *                 flatSheetNormal = nullptr);
   static AxisType
   EstimateFromCentroids(const SheetImageType * sheetMask);
   static bool

@@ -49,6 +49,10 @@ constexpr double SpreadEigenvalueRatio = 1.25;
 // Degrees by which the centroids' line may leave the tensor's axis (where that shows some
 // spread of the normals) before the tensor's axis is taken.
 constexpr double LargestDisagreement = 2.0;
+// The middle eigenvalue of the structure tensor below this fraction of the largest: the
+// normals all lie near one direction (a flat or gently curved sheet, a page), as a roll's,
+// even a squashed one's (0.28 at an axes ratio of 0.3), do not.
+constexpr double FlatSheetFraction = 0.15;
 
 IntensityImageType::Pointer
 GaussianDerivative(const IntensityImageType * input, const IntensityImageType::SpacingType & sigmas, unsigned int d)
@@ -95,7 +99,8 @@ SheetRollAxis::Estimate(const SheetImageType *     sheetMask,
                         const IntensityImageType * sheetIntensity,
                         bool &                     fromTensor,
                         AxisType *                 tensorAxisInReach,
-                        double *                   tensorSpread)
+                        double *                   tensorSpread,
+                        AxisType *                 flatSheetNormal)
 {
   // The sheet does not change along the roll axis: its normals all lie across it, so the
   // axis is the direction of least gradient energy over the sheet (the structure tensor's
@@ -292,6 +297,17 @@ SheetRollAxis::Estimate(const SheetImageType *     sheetMask,
   {
     *tensorSpread = smallest > 0.0 ? middle / smallest : std::numeric_limits<double>::infinity();
   }
+  if (flatSheetNormal != nullptr)
+  {
+    flatSheetNormal->Fill(0.0);
+    if (middle < FlatSheetFraction * eigen.get_eigenvalue(2))
+    {
+      for (unsigned r = 0; r < 3; ++r)
+      {
+        (*flatSheetNormal)[r] = withoutNoise.get_eigenvector(2)[r];
+      }
+    }
+  }
   if (tensorInReach && middle > 0.0 &&
       (middle > rolledEigenvalueRatio * smallest ||
        (middle > tiltedEigenvalueRatio * smallest && middle > comparableEigenvalues * eigen.get_eigenvalue(2))))
@@ -392,7 +408,24 @@ SheetRollAxis::Align(SheetImageType::Pointer &     sheetMask,
   bool           fromTensor = false;
   AxisType       tensorAxis{ 0.0 };
   double         spread = 0.0;
-  AxisType       axis = Estimate(originalMask, originalIntensity, fromTensor, &tensorAxis, &spread);
+  AxisType       flatNormal{ 0.0 };
+  AxisType       axis = Estimate(originalMask, originalIntensity, fromTensor, &tensorAxis, &spread, &flatNormal);
+  // A flat or gently curved sheet has no roll axis: the tensor's least direction is the
+  // noise's and the edges', and the centroids of slices that cut it aslant move along it, so
+  // that each refinement tilts the slices further (a page went from 8 to 88 degrees in four).
+  // Any direction in its plane lets the slices cut across it; the one nearest the slice
+  // normal resamples least (not at all where the slices already do).
+  bool flat = false;
+  if (!fromTensor && flatNormal.GetNorm() > 0.0)
+  {
+    AxisType inPlane = originalNormal - (originalNormal * flatNormal) * flatNormal;
+    if (inPlane.GetNorm() >= std::sin(LargestTilt * Math::pi / 180.0))
+    {
+      inPlane.Normalize();
+      axis = inPlane;
+      flat = true;
+    }
+  }
   // The centroids of a short roll's slices (a disc-like roll, cut across its faces by the
   // slices of a tilt) move across it, not along it: where their line leaves the slice normal
   // by more than the tensor's reach while the tensor's axis lies within it, or leaves the
@@ -404,7 +437,7 @@ SheetRollAxis::Align(SheetImageType::Pointer &     sheetMask,
     // Between the two lines, whichever way each points.
     const double between = angle(axis, tensorAxis);
     const double apart = std::min(between, 180.0 - between);
-    if (!fromTensor && tensorAxis.GetNorm() > 0.0 &&
+    if (!fromTensor && !flat && tensorAxis.GetNorm() > 0.0 &&
         (angle(axis, originalNormal) > LargestTilt || (spread > SpreadEigenvalueRatio && apart > LargestDisagreement)))
     {
       axis = tensorAxis;
@@ -420,7 +453,7 @@ SheetRollAxis::Align(SheetImageType::Pointer &     sheetMask,
   // estimate is global and needs one (the last, where it replaces the centroids'); the
   // centroids' is better from a better aligned grid (partial slices bias it less), so it
   // converges in a few.
-  for (int pass = 0; pass < 4 || fromTensor; ++pass)
+  for (int pass = 0; pass < 4 || fromTensor || flat; ++pass)
   {
     AxisType firstAxis;
     for (unsigned r = 0; r < 3; ++r)
@@ -507,7 +540,7 @@ SheetRollAxis::Align(SheetImageType::Pointer &     sheetMask,
       resampler->Update();
       sheetIntensity = resampler->GetOutput();
     }
-    if (fromTensor)
+    if (fromTensor || flat)
     {
       break;
     }
