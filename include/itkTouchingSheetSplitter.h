@@ -34,12 +34,14 @@ namespace itk {
  * middle and dips where two sheets meet, even where they fuse with no gap left (two
  * sheets side by side make a slab twice as thick, whose middle bends less). The cores,
  * the piece's voxels where P exceeds a fraction of its median over the piece, are taken
- * from a fraction of 0.6 upwards in steps of 0.1 (to 0.9): a core that falls apart at the
- * next step into two or more cores of at least MinimumCoreVoxels each is replaced by
- * them, the others stay whole, so a sheet that noise breaks into one large and some small
- * parts is not split. Every voxel of the piece then goes to its nearest core
- * (itk::DanielssonDistanceMapImageFilter's Voronoi map): across a fused contact, the
- * middle of the slab.
+ * from a fraction of 0.6 upwards in steps of 0.1 (to 1.3: a fused slab's middle keeps
+ * about 0.8 of a sheet's measure, near the median): a core that falls apart at the next
+ * step into two or more cores of at least MinimumCoreVoxels each is replaced by them when
+ * they lie one on the other (their footprints on the core's mean plane overlapping by half
+ * the smaller or more) and met inside every footprint (a page bulging onto the next), the
+ * others stay whole, so a sheet that noise or ink breaks into parts side by side, or a
+ * fold whose panels meet at a crease on their edges, is not split. Every voxel of the piece then goes to its nearest
+ * core (itk::DanielssonDistanceMapImageFilter's Voronoi map): across a fused contact, the middle of the slab.
  *
  * Inputs over one region: Values (intensities, or the mask itself as 0/1), Piece (non-zero
  * = the piece). Output: labels 1..Sheets on the piece's voxels (0 elsewhere), largest

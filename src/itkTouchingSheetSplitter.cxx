@@ -27,15 +27,30 @@
 #include <array>
 #include <cmath>
 #include <random>
+#include <unordered_set>
 #include <vector>
+
+#include "vnl/algo/vnl_symmetric_eigensystem.h"
 
 namespace itk {
 namespace {
 using PieceImage = Image<uint8_t, 3>;
 using LabelImage = Image<uint32_t, 3>;
 
-// The fractions of the median plate measure at which cores are taken, lowest first.
-constexpr double CoreFractions[] = { 0.6, 0.7, 0.8, 0.9 };
+// The fractions of the median plate measure at which cores are taken, lowest first. Where a
+// page bulges onto the next and fuses with it, the fused slab's middle keeps about 0.8 of a
+// sheet's measure (blur and the sheets' overlap), near the median: its cores part only
+// above it.
+constexpr double CoreFractions[] = { 0.6, 0.7, 0.8, 0.9, 1.0, 1.1, 1.2, 1.3 };
+// Parts of a core whose footprints on its mean plane overlap by at least this share of the
+// smaller one lie one on the other.
+constexpr double StackedOverlap = 0.5;
+// Where the parts met (the core's voxels left out of them within ContactReach voxels of two
+// of them) must lie inside every part's footprint: by this share of its extent along each
+// direction of the plane, and a voxel more. Pages fuse where one bulges onto the next,
+// within both; a fold's panels meet at its crease, on the edge of both.
+constexpr long   ContactReach = 2;
+constexpr double ContactInset = 0.05;
 // The other two eigenvalues must stay below this share of the plate's.
 constexpr double PlateDominance = 0.5;
 // The measure's scale per sheet thickness (a 2.5-voxel sheet: one voxel).
@@ -147,6 +162,176 @@ struct Core
   std::vector<SizeValueType> Voxels;
 };
 
+// Whether `parts` (labelled 1 to parts.size() in `partOf`) are sheets that touch within
+// `core`: every two lie one on the other, their footprints on the plane of their voxels'
+// two largest principal directions (one-voxel bins) overlapping by at least StackedOverlap
+// of the smaller, and where they met lies inside every footprint (ContactInset). The
+// parts into which noise or ink breaks one sheet's core lie side by side; the panels of a
+// fold lie one on the other but meet at the crease, on their edges.
+bool
+Stacked(const PieceImage * piece, const Core & core, const std::vector<Core> & parts, const uint32_t * partOf)
+{
+  const auto   size = piece->GetBufferedRegion().GetSize();
+  const auto & spacing = piece->GetSpacing();
+  auto         at = [&](SizeValueType v, double * p) {
+    p[0] = static_cast<double>(v % size[0]) * spacing[0];
+    p[1] = static_cast<double>((v / size[0]) % size[1]) * spacing[1];
+    p[2] = static_cast<double>(v / (size[0] * size[1])) * spacing[2];
+  };
+  double mean[3] = { 0.0, 0.0, 0.0 };
+  double count = 0.0;
+  for (const Core & part : parts)
+  {
+    for (SizeValueType v : part.Voxels)
+    {
+      double p[3];
+      at(v, p);
+      for (unsigned d = 0; d < 3; ++d)
+      {
+        mean[d] += p[d];
+      }
+      count += 1.0;
+    }
+  }
+  for (double & m : mean)
+  {
+    m /= count;
+  }
+  vnl_matrix<double> covariance(3, 3, 0.0);
+  for (const Core & part : parts)
+  {
+    for (SizeValueType v : part.Voxels)
+    {
+      double p[3];
+      at(v, p);
+      for (unsigned r = 0; r < 3; ++r)
+      {
+        for (unsigned c = 0; c < 3; ++c)
+        {
+          covariance(r, c) += (p[r] - mean[r]) * (p[c] - mean[c]);
+        }
+      }
+    }
+  }
+  const vnl_symmetric_eigensystem<double>  eigen(covariance);
+  const double                             bin = std::min({ spacing[0], spacing[1], spacing[2] });
+  std::vector<std::unordered_set<int64_t>> footprints(parts.size());
+  for (size_t i = 0; i < parts.size(); ++i)
+  {
+    for (SizeValueType v : parts[i].Voxels)
+    {
+      double p[3];
+      at(v, p);
+      double u = 0.0, w = 0.0;
+      for (unsigned d = 0; d < 3; ++d)
+      {
+        u += (p[d] - mean[d]) * eigen.get_eigenvector(2)[d];
+        w += (p[d] - mean[d]) * eigen.get_eigenvector(1)[d];
+      }
+      const auto iu = static_cast<int64_t>(std::lround(u / bin)), iw = static_cast<int64_t>(std::lround(w / bin));
+      footprints[i].insert(iu * (int64_t{ 1 } << 32) + iw);
+    }
+  }
+  auto project = [&](SizeValueType v, double & u, double & w) {
+    double p[3];
+    at(v, p);
+    u = 0.0;
+    w = 0.0;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      u += (p[d] - mean[d]) * eigen.get_eigenvector(2)[d];
+      w += (p[d] - mean[d]) * eigen.get_eigenvector(1)[d];
+    }
+  };
+  // The contact: the core's voxels in no part with two parts within ContactReach.
+  const auto label = [&](long x, long y, long z) -> uint32_t {
+    if (x < 0 || y < 0 || z < 0 || x >= static_cast<long>(size[0]) || y >= static_cast<long>(size[1]) ||
+        z >= static_cast<long>(size[2]))
+    {
+      return 0;
+    }
+    const uint32_t l = partOf[(static_cast<SizeValueType>(z) * size[1] + static_cast<SizeValueType>(y)) * size[0] +
+                              static_cast<SizeValueType>(x)];
+    return l <= parts.size() ? l : 0;
+  };
+  double contact[2] = { 0.0, 0.0 };
+  double contacts = 0.0;
+  for (SizeValueType v : core.Voxels)
+  {
+    const uint32_t own = partOf[v];
+    if (own > 0 && own <= parts.size())
+    {
+      continue;
+    }
+    const long x = static_cast<long>(v % size[0]), y = static_cast<long>((v / size[0]) % size[1]),
+               z = static_cast<long>(v / (size[0] * size[1]));
+    uint32_t first = 0;
+    bool     two = false;
+    for (long dz = -ContactReach; dz <= ContactReach && !two; ++dz)
+    {
+      for (long dy = -ContactReach; dy <= ContactReach && !two; ++dy)
+      {
+        for (long dx = -ContactReach; dx <= ContactReach && !two; ++dx)
+        {
+          const uint32_t l = label(x + dx, y + dy, z + dz);
+          two = l != 0 && first != 0 && l != first;
+          first = first == 0 ? l : first;
+        }
+      }
+    }
+    if (two)
+    {
+      double u = 0.0, w = 0.0;
+      project(v, u, w);
+      contact[0] += u;
+      contact[1] += w;
+      contacts += 1.0;
+    }
+  }
+  if (contacts == 0.0)
+  {
+    return false;
+  }
+  contact[0] /= contacts;
+  contact[1] /= contacts;
+  for (const Core & part : parts)
+  {
+    double lower[2] = { 1e300, 1e300 }, upper[2] = { -1e300, -1e300 };
+    for (SizeValueType v : part.Voxels)
+    {
+      double q[2];
+      project(v, q[0], q[1]);
+      for (unsigned d = 0; d < 2; ++d)
+      {
+        lower[d] = std::min(lower[d], q[d]);
+        upper[d] = std::max(upper[d], q[d]);
+      }
+    }
+    for (unsigned d = 0; d < 2; ++d)
+    {
+      const double inset = ContactInset * (upper[d] - lower[d]) + bin;
+      if (contact[d] < lower[d] + inset || contact[d] > upper[d] - inset)
+      {
+        return false;
+      }
+    }
+  }
+  for (size_t i = 0; i < parts.size(); ++i)
+  {
+    for (size_t j = i + 1; j < parts.size(); ++j)
+    {
+      const auto & small = footprints[i].size() <= footprints[j].size() ? footprints[i] : footprints[j];
+      const auto & large = footprints[i].size() <= footprints[j].size() ? footprints[j] : footprints[i];
+      const auto   shared = std::count_if(small.begin(), small.end(), [&](int64_t b) { return large.count(b) != 0; });
+      if (static_cast<double>(shared) < StackedOverlap * static_cast<double>(small.size()))
+      {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
 // Cores: the components of the plate measure above the first fraction of its median, each
 // kept whole unless it falls apart into two or more large cores at the next fraction.
 std::vector<Core>
@@ -206,6 +391,13 @@ FindCores(const PieceImage * piece, const std::vector<float> & plate, double med
         {
           split[l - 1].Voxels.push_back(v);
         }
+      }
+      // Sheets that touch lie one on the other; a core that breaks into parts side by side
+      // is one sheet's, broken by noise or its ink, and stays whole.
+      if (!Stacked(piece, core, split, parts->GetBufferPointer()))
+      {
+        next.push_back(std::move(core));
+        continue;
       }
       for (auto & part : split)
       {
