@@ -40,8 +40,9 @@ namespace itk {
  * they lie one on the other (their footprints on the core's mean plane overlapping by half
  * the smaller or more) and met inside every footprint (a page bulging onto the next), the
  * others stay whole, so a sheet that noise or ink breaks into parts side by side, or a
- * fold whose panels meet at a crease on their edges, is not split. Every voxel of the piece then goes to its nearest
- * core (itk::DanielssonDistanceMapImageFilter's Voronoi map): across a fused contact, the middle of the slab.
+ * fold whose panels meet at a crease on their edges, is not split. Every voxel of the
+ * piece then goes to its nearest core (itk::DanielssonDistanceMapImageFilter's Voronoi
+ * map): across a fused contact, the middle of the slab.
  *
  * Inputs over one region: Values (intensities, or the mask itself as 0/1), Piece (non-zero
  * = the piece). Output: labels 1..Sheets on the piece's voxels (0 elsewhere), largest

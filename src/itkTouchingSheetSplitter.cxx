@@ -213,36 +213,38 @@ Stacked(const PieceImage * piece, const Core & core, const std::vector<Core> & p
       }
     }
   }
-  const vnl_symmetric_eigensystem<double>  eigen(covariance);
+  const vnl_symmetric_eigensystem<double> eigen(covariance);
+  // A voxel's place on the plane of the two largest principal directions.
+  auto project = [&](SizeValueType v, double * q) {
+    double p[3];
+    at(v, p);
+    q[0] = 0.0;
+    q[1] = 0.0;
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      q[0] += (p[d] - mean[d]) * eigen.get_eigenvector(2)[d];
+      q[1] += (p[d] - mean[d]) * eigen.get_eigenvector(1)[d];
+    }
+  };
+  // Each part's footprint (one-voxel bins) and extent on the plane.
   const double                             bin = std::min({ spacing[0], spacing[1], spacing[2] });
   std::vector<std::unordered_set<int64_t>> footprints(parts.size());
+  std::vector<std::array<double, 4>>       extents(parts.size(), { 1e300, 1e300, -1e300, -1e300 });
   for (size_t i = 0; i < parts.size(); ++i)
   {
     for (SizeValueType v : parts[i].Voxels)
     {
-      double p[3];
-      at(v, p);
-      double u = 0.0, w = 0.0;
-      for (unsigned d = 0; d < 3; ++d)
-      {
-        u += (p[d] - mean[d]) * eigen.get_eigenvector(2)[d];
-        w += (p[d] - mean[d]) * eigen.get_eigenvector(1)[d];
-      }
-      const auto iu = static_cast<int64_t>(std::lround(u / bin)), iw = static_cast<int64_t>(std::lround(w / bin));
+      double q[2];
+      project(v, q);
+      const auto iu = static_cast<int64_t>(std::lround(q[0] / bin)), iw = static_cast<int64_t>(std::lround(q[1] / bin));
       footprints[i].insert(iu * (int64_t{ 1 } << 32) + iw);
+      for (unsigned d = 0; d < 2; ++d)
+      {
+        extents[i][d] = std::min(extents[i][d], q[d]);
+        extents[i][2 + d] = std::max(extents[i][2 + d], q[d]);
+      }
     }
   }
-  auto project = [&](SizeValueType v, double & u, double & w) {
-    double p[3];
-    at(v, p);
-    u = 0.0;
-    w = 0.0;
-    for (unsigned d = 0; d < 3; ++d)
-    {
-      u += (p[d] - mean[d]) * eigen.get_eigenvector(2)[d];
-      w += (p[d] - mean[d]) * eigen.get_eigenvector(1)[d];
-    }
-  };
   // The contact: the core's voxels in no part with two parts within ContactReach.
   const auto label = [&](long x, long y, long z) -> uint32_t {
     if (x < 0 || y < 0 || z < 0 || x >= static_cast<long>(size[0]) || y >= static_cast<long>(size[1]) ||
@@ -281,10 +283,10 @@ Stacked(const PieceImage * piece, const Core & core, const std::vector<Core> & p
     }
     if (two)
     {
-      double u = 0.0, w = 0.0;
-      project(v, u, w);
-      contact[0] += u;
-      contact[1] += w;
+      double q[2];
+      project(v, q);
+      contact[0] += q[0];
+      contact[1] += q[1];
       contacts += 1.0;
     }
   }
@@ -294,23 +296,12 @@ Stacked(const PieceImage * piece, const Core & core, const std::vector<Core> & p
   }
   contact[0] /= contacts;
   contact[1] /= contacts;
-  for (const Core & part : parts)
+  for (const auto & extent : extents)
   {
-    double lower[2] = { 1e300, 1e300 }, upper[2] = { -1e300, -1e300 };
-    for (SizeValueType v : part.Voxels)
-    {
-      double q[2];
-      project(v, q[0], q[1]);
-      for (unsigned d = 0; d < 2; ++d)
-      {
-        lower[d] = std::min(lower[d], q[d]);
-        upper[d] = std::max(upper[d], q[d]);
-      }
-    }
     for (unsigned d = 0; d < 2; ++d)
     {
-      const double inset = ContactInset * (upper[d] - lower[d]) + bin;
-      if (contact[d] < lower[d] + inset || contact[d] > upper[d] - inset)
+      const double inset = ContactInset * (extent[2 + d] - extent[d]) + bin;
+      if (contact[d] < extent[d] + inset || contact[d] > extent[2 + d] - inset)
       {
         return false;
       }
