@@ -109,6 +109,8 @@ struct VirtualUnwrapping_EXPORT DroppedSheetPieces
     size_t      Voxels;
     double      Area;
     std::string Reason;
+    /** One of the sheets split from a piece (the piece's other sheets were meshed). */
+    bool SplitFromPiece{ false };
   };
   std::vector<Untraceable> NotTraced;
 };
@@ -316,6 +318,13 @@ private:
              Sheet &                    whole,
              double                     minimumCoreVoxels,
              std::vector<std::string> & warnings);
+  /** Voxels times voxel volume over the first sheet's thickness (mm^2). */
+  double
+  AreaOf(SizeValueType voxels) const;
+  /** A piece's thickness (mm) from its volume and the area of its voxels' faces, for a piece
+   * that the extractor could not measure. */
+  static double
+  PieceThickness(const LabelImageType * labels, LabelPixelType label, const ImageRegion<3> & box);
   /** What was meshed of how many pieces, when that is not everything; empty otherwise. */
   std::string
   PiecesNote(const Pieces & pieces) const;
@@ -339,14 +348,16 @@ private:
   static constexpr double PieceOnMeshFraction = 0.5;
   static constexpr double PieceOffMeshFraction = 0.05;
 
-  SheetSurfaceMethodEnum                        m_Method{ SheetSurfaceMethodEnum::Auto };
-  double                                        m_SpacingAlongSheet{ 0.0 };
-  double                                        m_SpacingAlongAxis{ 0.0 };
-  double                                        m_ChordErrorFraction{ 0.1 };
-  double                                        m_AxisTiltTolerance{ 2.0 };
-  bool                                          m_EverySheet{ false };
-  double                                        m_MinimumSheetArea{ 0.0 };
-  double                                        m_MinimumSheetAreaUsed{ 0.0 };
+  SheetSurfaceMethodEnum m_Method{ SheetSurfaceMethodEnum::Auto };
+  double                 m_SpacingAlongSheet{ 0.0 };
+  double                 m_SpacingAlongAxis{ 0.0 };
+  double                 m_ChordErrorFraction{ 0.1 };
+  double                 m_AxisTiltTolerance{ 2.0 };
+  bool                   m_EverySheet{ false };
+  double                 m_MinimumSheetArea{ 0.0 };
+  double                 m_MinimumSheetAreaUsed{ 0.0 };
+  /** A voxel's share of a sheet's area: its volume over the first sheet's thickness. */
+  double                                        m_VoxelArea{ 0.0 };
   std::vector<Sheet>                            m_Sheets;
   std::vector<typename OutputMeshType::Pointer> m_SheetOutputs;
   typename SheetLabelImageType::Pointer         m_SheetLabels;

@@ -30,6 +30,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <exception>
 #include <numeric>
 #include <sstream>
 
@@ -115,16 +116,38 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   m_Sheets.clear();
   m_Dropped = DroppedSheetPieces{};
   std::vector<std::string> warnings;
-  m_Sheets.push_back(MeshSheetFrom(pieces, 1, warnings));
-  const double thickness = std::max(m_Sheets.front().Report.SheetThickness, std::cbrt(voxelVolume));
-  auto         areaOf = [&](SizeValueType voxels) { return static_cast<double>(voxels) * voxelVolume / thickness; };
+  // With every sheet, the largest piece may not trace whole because it holds pages that
+  // touch (its slices cross several of them): it is then split into its sheets, or dropped
+  // as untraceable, and the run fails only when no piece traces.
+  std::exception_ptr firstError;
+  try
+  {
+    m_Sheets.push_back(MeshSheetFrom(pieces, 1, warnings));
+  }
+  catch (const ExceptionObject &)
+  {
+    if (!m_EverySheet || this->GetAbortGenerateData())
+    {
+      throw;
+    }
+    firstError = std::current_exception();
+    Sheet untraced;
+    untraced.Report.Method = SheetSurfaceMethodEnum::General;
+    untraced.Report.SheetThickness = PieceThickness(labels, 1, pieces.Boxes[1]);
+    untraced.Summary.Voxels = pieces.Sizes[0];
+    untraced.Pieces.assign(2, 0);
+    untraced.Pieces[1] = 1;
+    pieces.Done[1] = 1;
+    m_Sheets.push_back(std::move(untraced));
+  }
+  m_VoxelArea = voxelVolume / std::max(m_Sheets.front().Report.SheetThickness, std::cbrt(voxelVolume));
   m_MinimumSheetAreaUsed = m_MinimumSheetArea > 0.0
                              ? m_MinimumSheetArea
-                             : std::max(AutomaticMinimumAreaFraction * areaOf(m_Sheets.front().Summary.Voxels),
+                             : std::max(AutomaticMinimumAreaFraction * AreaOf(m_Sheets.front().Summary.Voxels),
                                         AutomaticMinimumAreaVoxels * spacing[0] * spacing[1]);
-  if ((m_EverySheet || m_MinimumSheetArea > 0.0) && areaOf(m_Sheets.front().Summary.Voxels) < m_MinimumSheetAreaUsed)
+  if ((m_EverySheet || m_MinimumSheetArea > 0.0) && AreaOf(m_Sheets.front().Summary.Voxels) < m_MinimumSheetAreaUsed)
   {
-    const double largest = areaOf(m_Sheets.front().Summary.Voxels);
+    const double largest = AreaOf(m_Sheets.front().Summary.Voxels);
     m_Sheets.clear();
     itkExceptionMacro(<< "no sheet: the largest piece of material covers " << largest
                       << " mm^2, less than the minimum sheet area of " << m_MinimumSheetAreaUsed << " mm^2");
@@ -135,6 +158,20 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   {
     Sheet first = std::move(m_Sheets.front());
     m_Sheets = SplitSheet(pieces, 1, first, minimumCoreVoxels, warnings);
+    if (firstError && m_Sheets.size() == 1 && m_Sheets.front().Mesh.Points.empty())
+    {
+      std::string reason = "not traced";
+      try
+      {
+        std::rethrow_exception(firstError);
+      }
+      catch (const ExceptionObject & e)
+      {
+        reason = e.GetDescription();
+      }
+      m_Dropped.NotTraced.push_back({ pieces.Sizes[0], AreaOf(pieces.Sizes[0]), reason });
+      m_Sheets.clear();
+    }
   }
   for (SizeValueType l = 2; m_EverySheet && l <= pieces.Objects; ++l)
   {
@@ -142,7 +179,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     {
       continue;
     }
-    if (areaOf(pieces.Sizes[l - 1]) < m_MinimumSheetAreaUsed)
+    if (AreaOf(pieces.Sizes[l - 1]) < m_MinimumSheetAreaUsed)
     {
       pieces.Done[l] = 1;
       ++m_Dropped.TooSmall;
@@ -166,8 +203,14 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
         throw;
       }
       pieces.Done[l] = 1;
-      m_Dropped.NotTraced.push_back({ pieces.Sizes[l - 1], areaOf(pieces.Sizes[l - 1]), e.GetDescription() });
+      m_Dropped.NotTraced.push_back({ pieces.Sizes[l - 1], AreaOf(pieces.Sizes[l - 1]), e.GetDescription() });
     }
+  }
+  if (m_Sheets.empty())
+  {
+    std::rethrow_exception(firstError ? firstError
+                                      : std::make_exception_ptr(ExceptionObject(
+                                          __FILE__, __LINE__, "no piece of the mask could be traced as a sheet")));
   }
   const std::string piecesNote = PiecesNote(pieces);
   if (!piecesNote.empty())
@@ -194,7 +237,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   }
   for (Sheet & sheet : m_Sheets)
   {
-    Summarise(sheet, areaOf(sheet.Summary.Voxels));
+    Summarise(sheet, AreaOf(sheet.Summary.Voxels));
   }
   SheetMeshIntoMesh(m_Sheets.front().Mesh, this->GetOutput());
   MarkMeshWhole(this->GetOutput());
@@ -438,7 +481,21 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::SplitSheet(const Pieces &   
     std::vector<uint8_t> keep(k + 1, 0);
     keep[k] = 1;
     std::vector<std::string> sheetWarnings;
-    Sheet                    sheet = MeshLabels(splitLabels.GetPointer(), pieces.Intensity, keep, sheetWarnings);
+    Sheet                    sheet;
+    try
+    {
+      sheet = MeshLabels(splitLabels.GetPointer(), pieces.Intensity, keep, sheetWarnings);
+    }
+    catch (const ExceptionObject & e)
+    {
+      if (this->GetAbortGenerateData())
+      {
+        throw;
+      }
+      // One sheet of the split that does not trace is dropped; the others are kept.
+      m_Dropped.NotTraced.push_back({ splitVoxels[k], AreaOf(splitVoxels[k]), e.GetDescription(), true });
+      continue;
+    }
     sheet.Split = splitLabels.GetPointer();
     sheet.SplitLabel = static_cast<uint16_t>(k);
     sheet.Summary.Voxels = splitVoxels[k];
@@ -446,6 +503,47 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::SplitSheet(const Pieces &   
     sheets.push_back(std::move(sheet));
   }
   return sheets;
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+double
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AreaOf(SizeValueType voxels) const
+{
+  return static_cast<double>(voxels) * m_VoxelArea;
+}
+
+template <typename TMaskImage, typename TOutputMesh>
+double
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::PieceThickness(const LabelImageType * labels,
+                                                                   LabelPixelType         label,
+                                                                   const ImageRegion<3> & box)
+{
+  // Twice the volume over the faces' area: the thickness of a plate (its rim neglected).
+  // The faces of a tilted sheet's voxels overstate its area, so this errs thin.
+  const auto & spacing = labels->GetSpacing();
+  const double faceArea[3] = { spacing[1] * spacing[2], spacing[0] * spacing[2], spacing[0] * spacing[1] };
+  const auto   whole = labels->GetBufferedRegion();
+  double       volume = 0.0;
+  double       faces = 0.0;
+  for (ImageRegionConstIteratorWithIndex<LabelImageType> it(labels, box); !it.IsAtEnd(); ++it)
+  {
+    if (it.Get() != label)
+    {
+      continue;
+    }
+    volume += spacing[0] * spacing[1] * spacing[2];
+    auto index = it.GetIndex();
+    for (unsigned d = 0; d < 3; ++d)
+    {
+      for (const IndexValueType step : { -1, 1 })
+      {
+        index[d] += step;
+        faces += !whole.IsInside(index) || labels->GetPixel(index) != label ? faceArea[d] : 0.0;
+        index[d] -= step;
+      }
+    }
+  }
+  return faces > 0.0 ? 2.0 * volume / faces : 0.0;
 }
 
 template <typename TMaskImage, typename TOutputMesh>
@@ -473,17 +571,26 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::PiecesNote(const Pieces & pi
   }
   else if (m_EverySheet && (m_Dropped.TooSmall > 0 || !m_Dropped.NotTraced.empty()))
   {
-    std::ostringstream text;
-    text << m_Sheets.size() << " sheet(s) meshed from "
-         << meshedPieces - m_Dropped.TooSmall - m_Dropped.NotTraced.size() << " of " << pieces.Objects << " pieces";
+    const auto splitSheets = static_cast<SizeValueType>(
+      std::count_if(m_Dropped.NotTraced.begin(), m_Dropped.NotTraced.end(), [](const auto & dropped) {
+        return dropped.SplitFromPiece;
+      }));
+    const SizeValueType wholePieces = m_Dropped.NotTraced.size() - splitSheets;
+    std::ostringstream  text;
+    text << m_Sheets.size() << " sheet(s) meshed from " << meshedPieces - m_Dropped.TooSmall - wholePieces << " of "
+         << pieces.Objects << " pieces";
     if (m_Dropped.TooSmall > 0)
     {
       text << "; " << m_Dropped.TooSmall << " piece(s) below the minimum sheet area of " << m_MinimumSheetAreaUsed
            << " mm^2 ignored (" << m_Dropped.TooSmallVoxels << " voxels)";
     }
-    if (!m_Dropped.NotTraced.empty())
+    if (wholePieces > 0)
     {
-      text << "; " << m_Dropped.NotTraced.size() << " piece(s) could not be traced";
+      text << "; " << wholePieces << " piece(s) could not be traced";
+    }
+    if (splitSheets > 0)
+    {
+      text << "; " << splitSheets << " sheet(s) split from a piece could not be traced";
     }
     return text.str();
   }

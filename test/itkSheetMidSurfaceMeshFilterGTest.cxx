@@ -415,6 +415,58 @@ TEST(SheetMidSurfaceMeshFilter, EverySheetIsMeshedAndSpecksAreCounted)
   EXPECT_NEAR(filter->GetSheetMesh().Points[1], 4.5, 0.05);
 }
 
+// The largest piece is no sheet (a ball: no slice of it traces) and a smaller piece is: with
+// EverySheet the sheet is meshed and the ball dropped with the reason; for the largest piece
+// alone, the error.
+TEST(SheetMidSurfaceMeshFilter, AnUntraceableLargestPieceIsDroppedAndTheOthersMeshed)
+{
+  auto mask = MakeMask(60, 24);
+  mask->SetSpacing(0.5);
+  AddFlatSheet(mask, 4, 55, 8);
+  size_t ball = 0;
+  for (long z = 0; z < 24; ++z)
+  {
+    for (long y = 28; y < 53; ++y)
+    {
+      for (long x = 18; x < 43; ++x)
+      {
+        if ((x - 30) * (x - 30) + (y - 40) * (y - 40) + (z - 12) * (z - 12) <= 11 * 11)
+        {
+          mask->SetPixel({ { x, y, z } }, 1);
+          ++ball;
+        }
+      }
+    }
+  }
+  ASSERT_GT(ball, static_cast<size_t>(3 * 52 * 24));
+  auto filter = SurfaceType::New();
+  filter->SetInput(mask);
+  filter->SetMethod(itk::SheetSurfaceMethodEnum::General);
+  filter->EverySheetOn();
+  ASSERT_NO_THROW(filter->Update());
+  ASSERT_EQ(filter->GetNumberOfSheets(), 1u);
+  ASSERT_EQ(filter->GetDroppedPieces().NotTraced.size(), 1u);
+  EXPECT_EQ(filter->GetDroppedPieces().NotTraced[0].Voxels, ball);
+  EXPECT_GT(filter->GetDroppedPieces().NotTraced[0].Area, 0.0);
+  EXPECT_FALSE(filter->GetDroppedPieces().NotTraced[0].Reason.empty());
+  EXPECT_FALSE(filter->GetDroppedPieces().NotTraced[0].SplitFromPiece);
+  EXPECT_EQ(filter->GetSheetSummary(0).Voxels, static_cast<size_t>(3 * 52 * 24));
+  const itk::SheetMesh & mesh = filter->GetSheetMesh();
+  for (size_t i = 0; i < mesh.GetNumberOfPoints(); ++i)
+  {
+    ASSERT_NEAR(mesh.Points[3 * i + 1], 4.5, 0.05) << "point " << i;
+  }
+  bool noted = false;
+  for (const std::string & warning : filter->GetWarnings())
+  {
+    noted = noted || warning.find("could not be traced") != std::string::npos;
+  }
+  EXPECT_TRUE(noted);
+
+  filter->EverySheetOff();
+  EXPECT_THROW(filter->Update(), itk::ExceptionObject);
+}
+
 // Specks alone (noise, no sheet): a clear error, not a mesh of a speck.
 TEST(SheetMidSurfaceMeshFilter, SpecksWithoutASheetAreRefused)
 {

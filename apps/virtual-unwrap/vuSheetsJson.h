@@ -48,7 +48,10 @@ DroppedJson(const TSurfaceFilter & surfaceFilter)
   nlohmann::json                  untraceable = nlohmann::json::array();
   for (const auto & piece : dropped.NotTraced)
   {
-    untraceable.push_back({ { "voxels", piece.Voxels }, { "area_mm2", piece.Area }, { "reason", piece.Reason } });
+    untraceable.push_back({ { "voxels", piece.Voxels },
+                            { "area_mm2", piece.Area },
+                            { "reason", piece.Reason },
+                            { "split_from_piece", piece.SplitFromPiece } });
   }
   return { { "too_small",
              { { "pieces", dropped.TooSmall },
