@@ -78,15 +78,19 @@ namespace itk {
  *   background's speckle, which on a noisy scan reads as letters. Where that leaves no
  *   range, the plain percentile window. Empty when no pixel is finite.
  * - ClearBackground(): a copy in which every finite pixel that is not ink takes the
- *   median of the finite pixels (the sheet's background). Ink is the pixels more than one
+ *   median of the finite pixels (the sheet's background). Ink is made of the components
+ *   (8 neighbours, ITK's ConnectedComponentImageFilter) of the pixels more than one
  *   NoiseSpread() beyond the median in the ink's direction (brighter when inkIsBright)
- *   that connect, through such pixels (8 neighbours, ITK's
- *   BinaryReconstructionByDilationImageFilter), to a pixel more than 4.5 spreads beyond
- *   it: a letter's faint parts are kept with its strong ones, while the background's
- *   noise, which passes one spread in a sixth of the pixels and 4.5 about 3 times in a
- *   million, is cleared. Over a long sheet that speckle is what OCR reads as letters. A
- *   texture with no pixel 4.5 spreads beyond its median, or without spread, is returned
- *   unchanged; NaN stays NaN.
+ *   that reach a pixel more than 4.5 spreads beyond it, or whose mass (the sum of their
+ *   pixels' excess over one spread) exceeds that of every component on the other side of
+ *   the median. A letter's faint parts are kept with its strong ones; a faint letter that
+ *   nowhere reaches 4.5 spreads but outweighs every blob of the noise is kept whole
+ *   (the noise makes blobs on both sides alike, the ink on one side only, so the other
+ *   side measures the noise's largest blob in this very texture: high over a long sheet,
+ *   low over a small page). The background's noise, which passes one spread in a sixth of
+ *   the pixels and 4.5 about 3 times in a million, is cleared: over a long sheet that
+ *   speckle is what OCR reads as letters. A texture with no pixel 4.5 spreads beyond its
+ *   median, or without spread, is returned unchanged; NaN stays NaN.
  *   Display the result in DisplayWindow() of the texture before clearing.
  * - NoiseSpread(): 1.4826 x the median absolute deviation of the finite pixels (the
  *   standard deviation for Gaussian noise): the spread of the sheet's background, which

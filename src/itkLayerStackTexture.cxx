@@ -17,7 +17,7 @@
  *=========================================================================*/
 #include "itkLayerStackTexture.h"
 #include "itkBilateralImageFilter.h"
-#include "itkBinaryReconstructionByDilationImageFilter.h"
+#include "itkConnectedComponentImageFilter.h"
 #include "itkGaussianImageSource.h"
 #include "itkMultiThreaderBase.h"
 #include "itkTikhonovDeconvolutionImageFilter.h"
@@ -492,35 +492,68 @@ LayerStackTexture::ClearBackground(const TextureType * texture, bool inkIsBright
   // Beyond the background in the ink's direction, in noise spreads (NaN: not at all).
   const double sign = inkIsBright ? 1.0 : -1.0;
   using MaskType = Image<unsigned char, 2>;
-  const auto mask = [&](double spreads) {
+  const auto mask = [&](double side, double spreads) {
     auto image = MaskType::New();
     image->CopyInformation(texture);
     image->SetRegions(texture->GetBufferedRegion());
     image->Allocate();
     std::transform(in, in + n, image->GetBufferPointer(), [&](float v) {
-      return std::isfinite(v) && sign * (v - median) > spreads * spread ? 1 : 0;
+      return std::isfinite(v) && side * (v - median) > spreads * spread ? 1 : 0;
     });
     return image;
   };
-  const auto core = mask(InkCoreSpreads);
-  const auto coreBuffer = core->GetBufferPointer();
-  if (std::none_of(coreBuffer, coreBuffer + n, [](unsigned char c) { return c != 0; }))
+  // Components of the pixels beyond the background by InkSpreads in direction `side`
+  // (8 neighbours): for each (from label 1), its peak and its mass, the sum of its pixels'
+  // excess over InkSpreads, in spreads.
+  using LabelType = Image<uint32_t, 2>;
+  struct Components
+  {
+    LabelType::Pointer  Labels;
+    std::vector<double> Peak, Mass;
+  };
+  const auto components = [&](double side) {
+    auto label = ConnectedComponentImageFilter<MaskType, LabelType>::New();
+    label->SetInput(mask(side, InkSpreads));
+    label->FullyConnectedOn();
+    label->Update();
+    Components c;
+    c.Labels = label->GetOutput();
+    const size_t count = label->GetObjectCount();
+    c.Peak.assign(count + 1, 0.0);
+    c.Mass.assign(count + 1, 0.0);
+    const uint32_t * labels = c.Labels->GetBufferPointer();
+    for (size_t k = 0; k < n; ++k)
+    {
+      if (labels[k] != 0)
+      {
+        const double excess = side * (in[k] - median) / spread;
+        c.Peak[labels[k]] = std::max(c.Peak[labels[k]], excess);
+        c.Mass[labels[k]] += excess - InkSpreads;
+      }
+    }
+    return c;
+  };
+  const Components bright = components(sign);
+  if (std::none_of(bright.Peak.begin(), bright.Peak.end(), [](double peak) { return peak > InkCoreSpreads; }))
   {
     return result;
   }
-  using ReconstructionType = BinaryReconstructionByDilationImageFilter<MaskType>;
-  auto reconstruction = ReconstructionType::New();
-  reconstruction->SetMarkerImage(core);
-  reconstruction->SetMaskImage(mask(InkSpreads));
-  reconstruction->SetForegroundValue(1);
-  reconstruction->SetBackgroundValue(0);
-  reconstruction->SetFullyConnected(true);
-  reconstruction->Update();
-  const unsigned char * ink = reconstruction->GetOutput()->GetBufferPointer();
-  const auto            background = static_cast<float>(median);
+  // The noise makes blobs on both sides of the background alike, the ink on one side only:
+  // a component whose mass exceeds every component's on the other side is ink too (faint
+  // letters that nowhere reach the core's level); over a long sheet the noise's largest
+  // blob sets that bar high, over a small page low.
+  const Components     dark = components(-sign);
+  const double         darkMass = dark.Mass.empty() ? 0.0 : *std::max_element(dark.Mass.begin(), dark.Mass.end());
+  std::vector<uint8_t> keep(bright.Peak.size(), 0);
+  for (size_t l = 1; l < keep.size(); ++l)
+  {
+    keep[l] = bright.Peak[l] > InkCoreSpreads || bright.Mass[l] > darkMass ? 1 : 0;
+  }
+  const uint32_t * labels = bright.Labels->GetBufferPointer();
+  const auto       background = static_cast<float>(median);
   for (size_t k = 0; k < n; ++k)
   {
-    out[k] = std::isfinite(in[k]) && ink[k] == 0 ? background : in[k];
+    out[k] = std::isfinite(in[k]) && keep[labels[k]] == 0 ? background : in[k];
   }
   return result;
 }
