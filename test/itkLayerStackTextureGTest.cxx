@@ -661,6 +661,55 @@ TEST(LayerStackTexture, ClearBackgroundKeepsTheInkAndClearsTheSpeckle)
   EXPECT_THROW(LST::ClearBackground(nullptr), itk::ExceptionObject);
 }
 
+// A faint letter that nowhere reaches the ink's core level (1.5 noise spreads above the
+// background, no pixel of it at 4.5) beside a strong one: it outweighs every blob of the
+// noise below the background, so it is kept; the background is still cleared.
+TEST(LayerStackTexture, ClearBackgroundKeepsAFaintLetterThatOutweighsTheNoise)
+{
+  std::mt19937                    random(7);
+  std::normal_distribution<float> noise(0.0f, 1.0f);
+  const unsigned                  columns = 400, rows = 100;
+  auto               strong = [](unsigned x, unsigned y) { return y >= 30 && y < 70 && x >= 20 && x < 24; };
+  auto               faint = [](unsigned x, unsigned y) { return y >= 30 && y < 70 && x >= 200 && x < 207; };
+  std::vector<float> values(columns * rows);
+  for (auto & v : values)
+  {
+    v = noise(random);
+  }
+  const auto   texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
+    return 10.0f + values[y * columns + x] + (strong(x, y) ? 9.0f : faint(x, y) ? 1.5f : 0.0f);
+  });
+  const double median = LST::Quantiles(texture, { 0.5 })[0];
+  const double spread = LST::NoiseSpread(texture);
+  const auto   cleared = LST::ClearBackground(texture);
+  size_t       faintKept = 0, faintPixels = 0, speckle = 0, background = 0;
+  double       faintPeak = 0.0;
+  for (unsigned y = 0; y < rows; ++y)
+  {
+    for (unsigned x = 0; x < columns; ++x)
+    {
+      const itk::Index<2> i = { { long(x), long(y) } };
+      const float         before = texture->GetPixel(i), after = cleared->GetPixel(i);
+      if (faint(x, y))
+      {
+        ++faintPixels;
+        faintKept += after == before ? 1 : 0;
+        faintPeak = std::max(faintPeak, (before - median) / spread);
+      }
+      else if (!strong(x, y))
+      {
+        ++background;
+        speckle += after != static_cast<float>(median) ? 1 : 0;
+      }
+    }
+  }
+  // The faint letter has no pixel at the core's level: only its mass can keep it.
+  ASSERT_LT(faintPeak, 4.5);
+  // Its pixels above one spread (about 70 %) are kept.
+  EXPECT_GT(static_cast<double>(faintKept), 0.6 * static_cast<double>(faintPixels));
+  EXPECT_LT(static_cast<double>(speckle), 0.02 * static_cast<double>(background));
+}
+
 TEST(LayerStackTexture, MedianEqualsTheMedianOfEachWindow)
 {
   // Random values with holes off the sheet, 3 x 3 and 5 x 5 windows: every pixel equals the
