@@ -171,6 +171,12 @@ constexpr double BackgroundClip = 0.5;
 // times in a million pixels).
 constexpr double InkSpreads = 1.0;
 constexpr double InkCoreSpreads = 4.5;
+// ClearBackground: a component that reaches no core pixel is ink when its mass exceeds this
+// many times the heaviest component on the other side of the background (the noise's
+// largest blob there; the largest blob on the ink's side, of the same noise, would seldom
+// be heavier by as much: over long rolls of the stress family, the heaviest blob that was
+// no writing weighed 2.5 times the other side's).
+constexpr double InkMassOverNoise = 3.0;
 
 // StrokeContrast's blocks: at least this many pixels long, scored when at least this share
 // of their pixels is on the sheet.
@@ -547,7 +553,7 @@ LayerStackTexture::ClearBackground(const TextureType * texture, bool inkIsBright
   std::vector<uint8_t> keep(bright.Peak.size(), 0);
   for (size_t l = 1; l < keep.size(); ++l)
   {
-    keep[l] = bright.Peak[l] > InkCoreSpreads || bright.Mass[l] > darkMass ? 1 : 0;
+    keep[l] = bright.Peak[l] > InkCoreSpreads || bright.Mass[l] > InkMassOverNoise * darkMass ? 1 : 0;
   }
   const uint32_t * labels = bright.Labels->GetBufferPointer();
   const auto       background = static_cast<float>(median);
