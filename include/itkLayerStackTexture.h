@@ -83,11 +83,14 @@ namespace itk {
  *   NoiseSpread() beyond the median in the ink's direction (brighter when inkIsBright)
  *   that reach a pixel more than 4.5 spreads beyond it, or whose mass (the sum of their
  *   pixels' excess over one spread) exceeds that of every component on the other side of
- *   the median. A letter's faint parts are kept with its strong ones; a faint letter that
- *   nowhere reaches 4.5 spreads but outweighs every blob of the noise is kept whole
- *   (the noise makes blobs on both sides alike, the ink on one side only, so the other
- *   side measures the noise's largest blob in this very texture: high over a long sheet,
- *   low over a small page). The background's noise, which passes one spread in a sixth of
+ *   the median that stays within 4.5 spreads of it (a blot beyond that is no measure of
+ *   the noise) while their box is at most 1.5 times the median height, and width, of the
+ *   components of the first kind. A letter's faint parts are kept with its strong ones; a
+ *   faint letter that nowhere reaches 4.5 spreads but outweighs every blob of the noise is
+ *   kept whole (the noise makes blobs on both sides alike, the ink on one side only, so
+ *   the other side measures the noise's largest blob in this very texture: high over a
+ *   long sheet, low over a small page), and a faint band across a sheet, larger than any
+ *   letter, is not. The background's noise, which passes one spread in a sixth of
  *   the pixels and 4.5 about 3 times in a million, is cleared: over a long sheet that
  *   speckle is what OCR reads as letters. A texture with no pixel 4.5 spreads beyond its
  *   median, or without spread, is returned unchanged; NaN stays NaN.

@@ -171,12 +171,12 @@ constexpr double BackgroundClip = 0.5;
 // times in a million pixels).
 constexpr double InkSpreads = 1.0;
 constexpr double InkCoreSpreads = 4.5;
-// ClearBackground: a component that reaches no core pixel is ink when its mass exceeds this
-// many times the heaviest component on the other side of the background (the noise's
-// largest blob there; the largest blob on the ink's side, of the same noise, would seldom
-// be heavier by as much: over long rolls of the stress family, the heaviest blob that was
-// no writing weighed 2.5 times the other side's).
-constexpr double InkMassOverNoise = 3.0;
+// ClearBackground: a component that reaches no core pixel is ink when its mass exceeds the
+// heaviest noise blob's on the other side of the background and its box is at most this
+// many times the median height, and width, of the components that reach a core pixel (a
+// faint letter is the size of the others; a bright band across a roll's sheet, heavier
+// than any blob of the noise, is not).
+constexpr double InkBoxOverCores = 1.5;
 
 // StrokeContrast's blocks: at least this many pixels long, scored when at least this share
 // of their pixels is on the sheet.
@@ -516,6 +516,7 @@ LayerStackTexture::ClearBackground(const TextureType * texture, bool inkIsBright
   {
     LabelType::Pointer  Labels;
     std::vector<double> Peak, Mass;
+    std::vector<long>   Low[2], High[2];
   };
   const auto components = [&](double side) {
     auto label = ConnectedComponentImageFilter<MaskType, LabelType>::New();
@@ -527,14 +528,27 @@ LayerStackTexture::ClearBackground(const TextureType * texture, bool inkIsBright
     const size_t count = label->GetObjectCount();
     c.Peak.assign(count + 1, 0.0);
     c.Mass.assign(count + 1, 0.0);
+    for (unsigned d = 0; d < 2; ++d)
+    {
+      c.Low[d].assign(count + 1, std::numeric_limits<long>::max());
+      c.High[d].assign(count + 1, std::numeric_limits<long>::min());
+    }
     const uint32_t * labels = c.Labels->GetBufferPointer();
+    const auto       columns = static_cast<size_t>(texture->GetBufferedRegion().GetSize(0));
     for (size_t k = 0; k < n; ++k)
     {
-      if (labels[k] != 0)
+      const uint32_t l = labels[k];
+      if (l != 0)
       {
         const double excess = side * (in[k] - median) / spread;
-        c.Peak[labels[k]] = std::max(c.Peak[labels[k]], excess);
-        c.Mass[labels[k]] += excess - InkSpreads;
+        c.Peak[l] = std::max(c.Peak[l], excess);
+        c.Mass[l] += excess - InkSpreads;
+        const long at[2] = { static_cast<long>(k % columns), static_cast<long>(k / columns) };
+        for (unsigned d = 0; d < 2; ++d)
+        {
+          c.Low[d][l] = std::min(c.Low[d][l], at[d]);
+          c.High[d][l] = std::max(c.High[d][l], at[d]);
+        }
       }
     }
     return c;
@@ -545,15 +559,44 @@ LayerStackTexture::ClearBackground(const TextureType * texture, bool inkIsBright
     return result;
   }
   // The noise makes blobs on both sides of the background alike, the ink on one side only:
-  // a component whose mass exceeds every component's on the other side is ink too (faint
-  // letters that nowhere reach the core's level); over a long sheet the noise's largest
-  // blob sets that bar high, over a small page low.
-  const Components     dark = components(-sign);
-  const double         darkMass = dark.Mass.empty() ? 0.0 : *std::max_element(dark.Mass.begin(), dark.Mass.end());
-  std::vector<uint8_t> keep(bright.Peak.size(), 0);
-  for (size_t l = 1; l < keep.size(); ++l)
+  // a component whose mass exceeds every such component's on the other side, and whose box is
+  // about the size of the strong ink's, is ink too (a faint letter that nowhere reaches the
+  // core's level); over a long sheet the noise's heaviest blob sets that bar high, over a
+  // small page low.
+  const Components dark = components(-sign);
+  // Only the blobs within the noise's reach count (a dark blot past the core's level, where a
+  // touching page was blanked, is no measure of the noise).
+  double darkMass = 0.0;
+  for (size_t l = 1; l < dark.Mass.size(); ++l)
   {
-    keep[l] = bright.Peak[l] > InkCoreSpreads || bright.Mass[l] > InkMassOverNoise * darkMass ? 1 : 0;
+    darkMass = dark.Peak[l] <= InkCoreSpreads ? std::max(darkMass, dark.Mass[l]) : darkMass;
+  }
+  const size_t count = bright.Peak.size();
+  const auto   extent = [&bright](size_t l, unsigned d) {
+    return static_cast<double>(bright.High[d][l] - bright.Low[d][l] + 1);
+  };
+  // The strong ink's size: the median box of the components that reach the core (a band or
+  // blot that reaches it too does not set the size).
+  double coreExtent[2] = { 0.0, 0.0 };
+  for (unsigned d = 0; d < 2; ++d)
+  {
+    std::vector<double> extents;
+    for (size_t l = 1; l < count; ++l)
+    {
+      if (bright.Peak[l] > InkCoreSpreads)
+      {
+        extents.push_back(extent(l, d));
+      }
+    }
+    std::nth_element(extents.begin(), extents.begin() + extents.size() / 2, extents.end());
+    coreExtent[d] = extents[extents.size() / 2];
+  }
+  std::vector<uint8_t> keep(count, 0);
+  for (size_t l = 1; l < count; ++l)
+  {
+    const bool letterSized =
+      extent(l, 0) <= InkBoxOverCores * coreExtent[0] && extent(l, 1) <= InkBoxOverCores * coreExtent[1];
+    keep[l] = bright.Peak[l] > InkCoreSpreads || (bright.Mass[l] > darkMass && letterSized) ? 1 : 0;
   }
   const uint32_t * labels = bright.Labels->GetBufferPointer();
   const auto       background = static_cast<float>(median);

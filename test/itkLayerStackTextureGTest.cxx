@@ -663,27 +663,35 @@ TEST(LayerStackTexture, ClearBackgroundKeepsTheInkAndClearsTheSpeckle)
 
 // A faint letter that nowhere reaches the ink's core level (1.5 noise spreads above the
 // background, no pixel of it at 4.5) beside a strong one: it outweighs every blob of the
-// noise below the background, so it is kept; the background is still cleared.
+// noise below the background and is the strong letter's size, so it is kept; a faint band
+// eight times as long as the strong ink is not; the background is cleared.
 TEST(LayerStackTexture, ClearBackgroundKeepsAFaintLetterThatOutweighsTheNoise)
 {
   std::mt19937                    random(7);
   std::normal_distribution<float> noise(0.0f, 1.0f);
   const unsigned                  columns = 400, rows = 100;
-  auto               strong = [](unsigned x, unsigned y) { return y >= 30 && y < 70 && x >= 20 && x < 24; };
-  auto               faint = [](unsigned x, unsigned y) { return y >= 30 && y < 70 && x >= 200 && x < 207; };
+  auto strong = [](unsigned x, unsigned y) { return y >= 30 && y < 70 && x >= 20 && x < 28; };
+  auto faint = [](unsigned x, unsigned y) { return y >= 32 && y < 68 && x >= 200 && x < 207; };
+  // A band across the texture (2 spreads above the background, without noise: one piece),
+  // eight times as long as the strong ink.
+  auto               band = [](unsigned x, unsigned y) { return y >= 86 && y < 90 && x >= 40 && x < 360; };
   std::vector<float> values(columns * rows);
   for (auto & v : values)
   {
     v = noise(random);
   }
   const auto   texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
+    if (band(x, y))
+    {
+      return 12.0f;
+    }
     return 10.0f + values[y * columns + x] + (strong(x, y) ? 9.0f : faint(x, y) ? 1.5f : 0.0f);
   });
   const double median = LST::Quantiles(texture, { 0.5 })[0];
   const double spread = LST::NoiseSpread(texture);
   const auto   cleared = LST::ClearBackground(texture);
-  size_t       faintKept = 0, faintPixels = 0, speckle = 0, background = 0;
-  double       faintPeak = 0.0;
+  size_t       faintKept = 0, faintPixels = 0, speckle = 0, background = 0, bandKept = 0;
+  double       faintPeak = 0.0, bandPeak = 0.0;
   for (unsigned y = 0; y < rows; ++y)
   {
     for (unsigned x = 0; x < columns; ++x)
@@ -696,6 +704,11 @@ TEST(LayerStackTexture, ClearBackgroundKeepsAFaintLetterThatOutweighsTheNoise)
         faintKept += after == before ? 1 : 0;
         faintPeak = std::max(faintPeak, (before - median) / spread);
       }
+      else if (band(x, y))
+      {
+        bandKept += after == before ? 1 : 0;
+        bandPeak = std::max(bandPeak, (before - median) / spread);
+      }
       else if (!strong(x, y))
       {
         ++background;
@@ -705,9 +718,11 @@ TEST(LayerStackTexture, ClearBackgroundKeepsAFaintLetterThatOutweighsTheNoise)
   }
   // The faint letter has no pixel at the core's level: only its mass can keep it.
   ASSERT_LT(faintPeak, 4.5);
+  ASSERT_LT(bandPeak, 4.5);
   // Its pixels above one spread (about 70 %) are kept.
   EXPECT_GT(static_cast<double>(faintKept), 0.6 * static_cast<double>(faintPixels));
   EXPECT_LT(static_cast<double>(speckle), 0.02 * static_cast<double>(background));
+  EXPECT_EQ(bandKept, 0u);
 }
 
 TEST(LayerStackTexture, MedianEqualsTheMedianOfEachWindow)
