@@ -321,10 +321,6 @@ private:
   /** Voxels times voxel volume over the first sheet's thickness (mm^2). */
   double
   AreaOf(SizeValueType voxels) const;
-  /** A piece's thickness (mm) from its volume and the area of its voxels' faces, for a piece
-   * that the extractor could not measure. */
-  static double
-  PieceThickness(const LabelImageType * labels, LabelPixelType label, const ImageRegion<3> & box);
   /** What was meshed of how many pieces, when that is not everything; empty otherwise. */
   std::string
   PiecesNote(const Pieces & pieces) const;

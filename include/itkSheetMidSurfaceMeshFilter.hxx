@@ -120,24 +120,24 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
   // touch (its slices cross several of them): it is then split into its sheets, or dropped
   // as untraceable, and the run fails only when no piece traces.
   std::exception_ptr firstError;
+  std::string        firstReason;
   try
   {
     m_Sheets.push_back(MeshSheetFrom(pieces, 1, warnings));
   }
-  catch (const ExceptionObject &)
+  catch (const ExceptionObject & e)
   {
     if (!m_EverySheet || this->GetAbortGenerateData())
     {
       throw;
     }
     firstError = std::current_exception();
+    firstReason = e.GetDescription();
     Sheet untraced;
     untraced.Report.Method = SheetSurfaceMethodEnum::General;
-    untraced.Report.SheetThickness = PieceThickness(labels, 1, pieces.Boxes[1]);
+    untraced.Report.SheetThickness =
+      PlateThickness(labels, pieces.Boxes[1], [](LabelPixelType label) { return label == 1; });
     untraced.Summary.Voxels = pieces.Sizes[0];
-    untraced.Pieces.assign(2, 0);
-    untraced.Pieces[1] = 1;
-    pieces.Done[1] = 1;
     m_Sheets.push_back(std::move(untraced));
   }
   m_VoxelArea = voxelVolume / std::max(m_Sheets.front().Report.SheetThickness, std::cbrt(voxelVolume));
@@ -160,16 +160,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
     m_Sheets = SplitSheet(pieces, 1, first, minimumCoreVoxels, warnings);
     if (firstError && m_Sheets.size() == 1 && m_Sheets.front().Mesh.Points.empty())
     {
-      std::string reason = "not traced";
-      try
-      {
-        std::rethrow_exception(firstError);
-      }
-      catch (const ExceptionObject & e)
-      {
-        reason = e.GetDescription();
-      }
-      m_Dropped.NotTraced.push_back({ pieces.Sizes[0], AreaOf(pieces.Sizes[0]), reason });
+      m_Dropped.NotTraced.push_back({ pieces.Sizes[0], AreaOf(pieces.Sizes[0]), firstReason });
       m_Sheets.clear();
     }
   }
@@ -510,40 +501,6 @@ double
 SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::AreaOf(SizeValueType voxels) const
 {
   return static_cast<double>(voxels) * m_VoxelArea;
-}
-
-template <typename TMaskImage, typename TOutputMesh>
-double
-SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::PieceThickness(const LabelImageType * labels,
-                                                                   LabelPixelType         label,
-                                                                   const ImageRegion<3> & box)
-{
-  // Twice the volume over the faces' area: the thickness of a plate (its rim neglected).
-  // The faces of a tilted sheet's voxels overstate its area, so this errs thin.
-  const auto & spacing = labels->GetSpacing();
-  const double faceArea[3] = { spacing[1] * spacing[2], spacing[0] * spacing[2], spacing[0] * spacing[1] };
-  const auto   whole = labels->GetBufferedRegion();
-  double       volume = 0.0;
-  double       faces = 0.0;
-  for (ImageRegionConstIteratorWithIndex<LabelImageType> it(labels, box); !it.IsAtEnd(); ++it)
-  {
-    if (it.Get() != label)
-    {
-      continue;
-    }
-    volume += spacing[0] * spacing[1] * spacing[2];
-    auto index = it.GetIndex();
-    for (unsigned d = 0; d < 3; ++d)
-    {
-      for (const IndexValueType step : { -1, 1 })
-      {
-        index[d] += step;
-        faces += !whole.IsInside(index) || labels->GetPixel(index) != label ? faceArea[d] : 0.0;
-        index[d] -= step;
-      }
-    }
-  }
-  return faces > 0.0 ? 2.0 * volume / faces : 0.0;
 }
 
 template <typename TMaskImage, typename TOutputMesh>

@@ -21,7 +21,47 @@
 #include "VirtualUnwrappingExport.h"
 #include "itkImage.h"
 
+#include <cmath>
+
 namespace itk {
+
+/** The thickness of the plate made by the voxels of `image` within `region` for which
+ * `inside(value)` holds: twice their volume over the area of their faces to the other
+ * voxels (a staircase overstates an oblique sheet's area, so this errs thin), in physical
+ * units (a voxel's cube root of volume per voxel); 0 without such voxels. */
+template <typename TImage, typename TInside>
+double
+PlateThickness(const TImage * image, const ImageRegion<3> & region, TInside inside)
+{
+  const auto    size = region.GetSize();
+  const auto    full = image->GetBufferedRegion().GetSize();
+  const auto    start = image->ComputeOffset(region.GetIndex());
+  const auto *  in = image->GetBufferPointer();
+  const auto &  spacing = image->GetSpacing();
+  SizeValueType voxels = 0, faces = 0;
+  for (SizeValueType z = 0; z < size[2]; ++z)
+  {
+    for (SizeValueType y = 0; y < size[1]; ++y)
+    {
+      for (SizeValueType x = 0; x < size[0]; ++x)
+      {
+        const auto v = start + static_cast<OffsetValueType>((z * full[1] + y) * full[0] + x);
+        if (!inside(in[v]))
+        {
+          continue;
+        }
+        ++voxels;
+        faces += (x == 0 || !inside(in[v - 1])) + (x + 1 == size[0] || !inside(in[v + 1]));
+        faces += (y == 0 || !inside(in[v - full[0]])) + (y + 1 == size[1] || !inside(in[v + full[0]]));
+        faces +=
+          (z == 0 || !inside(in[v - full[0] * full[1]])) + (z + 1 == size[2] || !inside(in[v + full[0] * full[1]]));
+      }
+    }
+  }
+  return faces > 0 ? 2.0 * std::cbrt(spacing[0] * spacing[1] * spacing[2]) * static_cast<double>(voxels) /
+                       static_cast<double>(faces)
+                   : 0.0;
+}
 /** \brief Splits one piece of a sheet mask into the sheets that touch within it: pages
  * stuck together over part of their area, which thresholding joins into one piece.
  *

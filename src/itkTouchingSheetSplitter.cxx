@@ -92,34 +92,8 @@ Components(const PieceImage * like, TInside inside, std::vector<SizeValueType> &
 double
 MeasureScale(const PieceImage * piece, double sigma)
 {
-  const uint8_t * in = piece->GetBufferPointer();
-  const auto      size = piece->GetBufferedRegion().GetSize();
-  const auto &    spacing = piece->GetSpacing();
-  SizeValueType   voxels = 0, faces = 0;
-  for (SizeValueType z = 0; z < size[2]; ++z)
-  {
-    for (SizeValueType y = 0; y < size[1]; ++y)
-    {
-      for (SizeValueType x = 0; x < size[0]; ++x)
-      {
-        const SizeValueType v = (z * size[1] + y) * size[0] + x;
-        if (in[v] == 0)
-        {
-          continue;
-        }
-        ++voxels;
-        faces += (x == 0 || in[v - 1] == 0) + (x + 1 == size[0] || in[v + 1] == 0);
-        faces += (y == 0 || in[v - size[0]] == 0) + (y + 1 == size[1] || in[v + size[0]] == 0);
-        faces += (z == 0 || in[v - size[0] * size[1]] == 0) + (z + 1 == size[2] || in[v + size[0] * size[1]] == 0);
-      }
-    }
-  }
-  const double voxelSize = std::cbrt(spacing[0] * spacing[1] * spacing[2]);
-  if (faces > 0)
-  {
-    sigma = std::max(sigma, ScalePerThickness * 2.0 * voxelSize * static_cast<double>(voxels) / faces);
-  }
-  return sigma;
+  return std::max(
+    sigma, ScalePerThickness * PlateThickness(piece, piece->GetBufferedRegion(), [](uint8_t v) { return v != 0; }));
 }
 
 // The plate measure (minus the across-sheet eigenvalue of the Hessian where it dominates)

@@ -851,6 +851,11 @@ TraceRoll(const SheetVolumeView &             volume,
                     static_cast<double>(trace.Confirmed.size());
     out.Turns = static_cast<double>(trace.Last() - trace.First) / static_cast<double>(tracer.Frame().Rays);
   }
+  // A seed slice's trace may turn and grow like a spiral's where a flat sheet bends (a page
+  // pressed onto the next) while no slice keeps a trace of a roll: not a roll.
+  result.Rolled = result.Rolled && std::any_of(result.Slices.begin(),
+                                               result.Slices.end(),
+                                               [](const SliceTrace & slice) { return !slice.Line.empty(); });
   progress(1.0);
   return result;
 }

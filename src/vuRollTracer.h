@@ -66,7 +66,8 @@ struct Result
 {
   std::vector<SliceTrace> Slices;
   /** True when the middle of the sheet traces as a spiral of at least one turn that passes
-   * through most crossings of material with the rays (a rolled sheet). */
+   * through most crossings of material with the rays (a rolled sheet), and some slice
+   * keeps a trace of it. */
   bool Rolled{ false };
   /** Fraction of the seed slice's crossings that lie on its traced spiral. */
   double Explained{ 0.0 };

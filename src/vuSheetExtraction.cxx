@@ -228,11 +228,7 @@ Extraction::TraceSlices()
                                              [&](double fraction) { report(rollShare * fraction); });
     if (method == SheetSurfaceMethodEnum::Auto)
     {
-      // A seed slice's trace may turn and grow like a spiral's where a flat sheet bends (a
-      // page pressed onto the next) while no slice keeps a trace of the roll: not a roll.
-      const bool anyTraced =
-        std::any_of(roll.Slices.begin(), roll.Slices.end(), [](const auto & slice) { return !slice.Line.empty(); });
-      method = roll.Rolled && anyTraced ? SheetSurfaceMethodEnum::Roll : SheetSurfaceMethodEnum::General;
+      method = roll.Rolled ? SheetSurfaceMethodEnum::Roll : SheetSurfaceMethodEnum::General;
     }
     else if (!roll.Rolled)
     {
