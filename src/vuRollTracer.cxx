@@ -86,6 +86,9 @@ constexpr double SeedPreference = 0.05;
 // How much more of the seed slice's crossings its trace turn by turn (minimal paths) must
 // explain than the crossing follower's to be taken instead.
 constexpr double PathsPreference = 0.02;
+// A roll's slices keep traces that turn, at their median, at least this share of the seed
+// slice's turns.
+constexpr double KeptTurnsShare = 0.5;
 
 // Angular steps that make `arc` mm along a trace at radius rho (at least a voxel).
 double
@@ -852,10 +855,18 @@ TraceRoll(const SheetVolumeView &             volume,
     out.Turns = static_cast<double>(trace.Last() - trace.First) / static_cast<double>(tracer.Frame().Rays);
   }
   // A seed slice's trace may turn and grow like a spiral's where a flat sheet bends (a page
-  // pressed onto the next) while no slice keeps a trace of a roll: not a roll.
-  result.Rolled = result.Rolled && std::any_of(result.Slices.begin(),
-                                               result.Slices.end(),
-                                               [](const SliceTrace & slice) { return !slice.Line.empty(); });
+  // pressed onto the next, a block of pages fused into one piece) while the slices keep no
+  // trace of a roll, or keep only short arcs of one: a roll's slices turn about as often as
+  // its seed slice, so the traces kept must turn, at their median, at least half as often.
+  std::vector<double> keptTurns;
+  for (const SliceTrace & slice : result.Slices)
+  {
+    if (!slice.Line.empty())
+    {
+      keptTurns.push_back(slice.Turns);
+    }
+  }
+  result.Rolled = result.Rolled && !keptTurns.empty() && Median(keptTurns) >= KeptTurnsShare * turns;
   progress(1.0);
   return result;
 }
