@@ -269,6 +269,10 @@ private:
    * this many in-plane voxels. */
   static constexpr double AutomaticMinimumAreaFraction = 0.01;
   static constexpr double AutomaticMinimumAreaVoxels = 400.0;
+  /** Pieces whose thickness is measured for the splitter's scale (Pieces::ThinnestSheet): the
+   * largest ones, up to this many, of at least this share of the largest's voxels. */
+  static constexpr SizeValueType ThicknessPieces = 32;
+  static constexpr double        ThicknessPieceShare = 0.05;
   struct Sheet
   {
     SheetMesh             Mesh;
@@ -294,6 +298,10 @@ private:
     std::vector<ImageRegion<3>> Boxes;
     std::vector<SizeValueType>  Sizes;
     std::vector<uint8_t>        Done;
+    /** With every sheet: the thinnest of the large pieces' thicknesses (mm; 0: not measured),
+     * a page's where a book's pages lie apart in places, which the splitter's scale heeds
+     * where pages fused into one piece make it thicker. */
+    double ThinnestSheet{ 0.0 };
   };
   /** The sheet made of the pieces of `source` (the labels, or a piece split into the sheets
    * that touch in it) whose labels are kept: their box read, aligned with the roll axis,

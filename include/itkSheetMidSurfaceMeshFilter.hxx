@@ -110,6 +110,14 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
       pieces.Boxes[l] = statistics->GetRegion(l);
     }
   }
+  for (SizeValueType l = 1; m_EverySheet && l <= std::min<SizeValueType>(pieces.Objects, ThicknessPieces); ++l)
+  {
+    if (static_cast<double>(pieces.Sizes[l - 1]) >= ThicknessPieceShare * static_cast<double>(pieces.Sizes[0]))
+    {
+      const double t = PlateThickness(labels, pieces.Boxes[l], [l](LabelPixelType label) { return label == l; });
+      pieces.ThinnestSheet = pieces.ThinnestSheet > 0.0 ? std::min(pieces.ThinnestSheet, t) : t;
+    }
+  }
   const auto & spacing = mask->GetSpacing();
   const double voxelVolume = spacing[0] * spacing[1] * spacing[2];
 
@@ -440,8 +448,8 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::SplitSheet(const Pieces &   
   }
   const auto &             spacing = pieces.Labels->GetSpacing();
   const double             sigma = std::min({ spacing[0], spacing[1], spacing[2] });
-  const TouchingSheetSplit split =
-    SplitTouchingSheets(values, pieceMask, sigma, static_cast<SizeValueType>(std::max(1.0, minimumCoreVoxels)));
+  const TouchingSheetSplit split = SplitTouchingSheets(
+    values, pieceMask, sigma, static_cast<SizeValueType>(std::max(1.0, minimumCoreVoxels)), pieces.ThinnestSheet);
   if (split.Sheets < 2)
   {
     sheets.push_back(std::move(whole));

@@ -84,6 +84,16 @@ PlateThickness(const TImage * image, const ImageRegion<3> & region, TInside insi
  * piece then goes to its nearest core (itk::DanielssonDistanceMapImageFilter's Voronoi
  * map): across a fused contact, the middle of the slab.
  *
+ * Pages fused into one piece make it thicker than a page, and the scale its thickness
+ * sets coarser than a page's: where a part split off, or SheetThickness (mm: the scan's
+ * thinnest sheet where known, 0 otherwise), asks for a scale below 0.85 of the first, the
+ * piece is split again at that finer scale, and the finer split is kept when it finds
+ * more sheets that lie apart: every two that meet do so over less than half the smaller
+ * one's footprint (pages with a gap between them, fused where one bulges onto the next), or
+ * the intensity where they meet dips a quarter of the way from the sheets' level to the
+ * air's (pages whose gap the mask fills). A thick sheet's two faces, which a scale well
+ * below its thickness sees as two plates, meet all over across its dense middle.
+ *
  * Inputs over one region: Values (intensities, or the mask itself as 0/1), Piece (non-zero
  * = the piece). Output: labels 1..Sheets on the piece's voxels (0 elsewhere), largest
  * first; Sheets is 1 (and the labels all 1) when the piece holds one sheet.
@@ -99,7 +109,8 @@ VirtualUnwrapping_EXPORT TouchingSheetSplit
 SplitTouchingSheets(const Image<float, 3> *   values,
                     const Image<uint8_t, 3> * piece,
                     double                    sigma,
-                    SizeValueType             minimumCoreVoxels);
+                    SizeValueType             minimumCoreVoxels,
+                    double                    sheetThickness = 0.0);
 /** A copy of `volume` in which the voxels of the other sheets (labels of `sheets` other
  * than 0 and `sheet`), and the unlabelled voxels next to them (their blurred faces), hold
  * the background: values of the unlabelled voxels away from every sheet (air as scanned,

@@ -26,8 +26,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
+#include <map>
 #include <random>
 #include <unordered_set>
+#include <utility>
 #include <vector>
 
 #include "vnl/algo/vnl_symmetric_eigensystem.h"
@@ -55,6 +58,14 @@ constexpr double ContactInset = 0.05;
 constexpr double PlateDominance = 0.5;
 // The measure's scale per sheet thickness (a 2.5-voxel sheet: one voxel).
 constexpr double ScalePerThickness = 0.4;
+// The piece is split again at the scale its thinnest part asks for when that is below this
+// share of the piece's own.
+constexpr double FinerScaleShare = 0.85;
+// The finer split is kept where every two of its sheets meet over less than FusedShare of the
+// smaller one's footprint, or the intensity where they meet dips at least FinerSplitGap of
+// the way from the sheets' level to the air's (SheetsLieApart).
+constexpr double FusedShare = 0.5;
+constexpr double FinerSplitGap = 0.25;
 // A core that falls apart is split only into parts of at least this share of it.
 constexpr double SliverFraction = 0.05;
 
@@ -403,23 +414,102 @@ LabelByNearestCore(const PieceImage * piece, const std::vector<Core> & cores, ui
     out[v] = in[v] != 0 ? static_cast<uint16_t>(voronoi[v]) : 0;
   }
 }
+// Whether every two of the sheets labelled in `labels` that meet (the piece's voxels with a
+// face-neighbour in the piece labelled with the other) lie apart: they meet over less than
+// FusedShare of the smaller one's footprint (its voxels over `thickness` voxels: pages with
+// a gap between them, fused where one bulges onto the other), or the intensity where they
+// meet dips at least FinerSplitGap of the way from the cores' level towards the air's (the
+// region's voxels outside the piece: pages whose gap the mask fills). A thick sheet's two
+// faces, which a scale well below its thickness sees as two plates, meet all over across
+// its dense middle.
+bool
+SheetsLieApart(const Image<float, 3> *       values,
+               const PieceImage *            piece,
+               const std::vector<Core> &     cores,
+               const std::vector<uint16_t> & labels,
+               double                        thickness)
+{
+  const auto                                                  size = piece->GetBufferedRegion().GetSize();
+  const SizeValueType                                         n = piece->GetBufferedRegion().GetNumberOfPixels();
+  const uint8_t *                                             in = piece->GetBufferPointer();
+  const float *                                               value = values->GetBufferPointer();
+  const SizeValueType                                         strides[3] = { 1, size[0], size[0] * size[1] };
+  std::vector<float>                                          core, air;
+  std::vector<SizeValueType>                                  voxels(cores.size() + 1, 0);
+  std::map<std::pair<uint16_t, uint16_t>, std::vector<float>> meet;
+  for (const Core & c : cores)
+  {
+    for (SizeValueType v : c.Voxels)
+    {
+      core.push_back(value[v]);
+    }
+  }
+  for (SizeValueType v = 0; v < n; ++v)
+  {
+    if (in[v] == 0)
+    {
+      air.push_back(value[v]);
+      continue;
+    }
+    ++voxels[std::min<size_t>(labels[v], cores.size())];
+    SizeValueType rest = v;
+    uint16_t      other = 0;
+    for (int d = 2; d >= 0 && other == 0; --d)
+    {
+      const SizeValueType at = rest / strides[d];
+      rest %= strides[d];
+      for (const SizeValueType u : { at > 0 ? v - strides[d] : v, at + 1 < size[d] ? v + strides[d] : v })
+      {
+        other = other == 0 && in[u] != 0 && labels[u] != labels[v] ? labels[u] : other;
+      }
+    }
+    if (other != 0)
+    {
+      meet[{ std::min(other, labels[v]), std::max(other, labels[v]) }].push_back(value[v]);
+    }
+  }
+  const auto median = [](std::vector<float> & x) {
+    std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
+    return static_cast<double>(x[x.size() / 2]);
+  };
+  if (core.empty() || air.empty())
+  {
+    return false;
+  }
+  const double sheet = median(core), background = median(air);
+  for (auto & [pair, between] : meet)
+  {
+    const double footprint =
+      static_cast<double>(std::min(voxels[pair.first], voxels[pair.second])) / std::max(1.0, thickness);
+    // Both sides of where they meet count: half of them is the area.
+    if (0.5 * static_cast<double>(between.size()) < FusedShare * footprint)
+    {
+      continue;
+    }
+    if (!(sheet > background) || (sheet - median(between)) / (sheet - background) < FinerSplitGap)
+    {
+      return false;
+    }
+  }
+  return true;
+}
 } // namespace
 
 TouchingSheetSplit
 SplitTouchingSheets(const Image<float, 3> * values,
                     const PieceImage *      piece,
                     double                  sigma,
-                    SizeValueType           minimumCoreVoxels)
+                    SizeValueType           minimumCoreVoxels,
+                    double                  sheetThickness)
 {
   if (values == nullptr || piece == nullptr || values->GetBufferedRegion() != piece->GetBufferedRegion())
   {
     itkGenericExceptionMacro(<< "SplitTouchingSheets: the values and the piece must cover the same region");
   }
-  const SizeValueType      n = piece->GetBufferedRegion().GetNumberOfPixels();
-  const uint8_t *          in = piece->GetBufferPointer();
-  std::vector<double>      measured;
-  const std::vector<float> plate = PlateMeasure(values, piece, MeasureScale(piece, sigma), measured);
-  TouchingSheetSplit       result;
+  const SizeValueType n = piece->GetBufferedRegion().GetNumberOfPixels();
+  const uint8_t *     in = piece->GetBufferPointer();
+  const double        scale = MeasureScale(piece, sigma);
+  TouchingSheetSplit  result;
   result.Labels = Image<uint16_t, 3>::New();
   result.Labels->CopyInformation(piece);
   result.Labels->SetRegions(piece->GetBufferedRegion());
@@ -434,21 +524,55 @@ SplitTouchingSheets(const Image<float, 3> * values,
     result.Sheets = 1;
     return result;
   };
-  if (measured.size() < 2 * minimumCoreVoxels)
+  // The cores at a scale, largest first (none when too little of the piece is plate-like).
+  const auto coresAt = [&](double at) {
+    std::vector<double>      measured;
+    const std::vector<float> plate = PlateMeasure(values, piece, at, measured);
+    std::vector<Core>        cores;
+    if (measured.size() >= 2 * minimumCoreVoxels)
+    {
+      std::nth_element(measured.begin(), measured.begin() + measured.size() / 2, measured.end());
+      cores = FindCores(piece, plate, measured[measured.size() / 2], minimumCoreVoxels);
+    }
+    std::sort(
+      cores.begin(), cores.end(), [](const Core & a, const Core & b) { return a.Voxels.size() > b.Voxels.size(); });
+    return cores;
+  };
+  std::vector<Core> cores = coresAt(scale);
+  // Pages fused into one piece make it thicker than a page, and the scale its thickness sets
+  // coarser than a page's: where a part split off, or the scan's thinnest sheet, asks for a
+  // clearly finer scale, the piece is split again at it, and that split is kept when it
+  // finds more sheets.
+  double thinnest = sheetThickness > 0.0 ? sheetThickness : std::numeric_limits<double>::infinity();
+  if (cores.size() >= 2)
   {
-    return whole();
+    LabelByNearestCore(piece, cores, out);
+    for (size_t c = 1; c <= cores.size(); ++c)
+    {
+      const double t = PlateThickness(
+        result.Labels.GetPointer(), piece->GetBufferedRegion(), [c](uint16_t label) { return label == c; });
+      thinnest = t > 0.0 ? std::min(thinnest, t) : thinnest;
+    }
   }
-  std::nth_element(measured.begin(), measured.begin() + measured.size() / 2, measured.end());
-  const double median = measured[measured.size() / 2];
-
-  std::vector<Core> cores = FindCores(piece, plate, median, minimumCoreVoxels);
+  const double finer = std::max(sigma, ScalePerThickness * thinnest);
+  if (std::isfinite(thinnest) && finer < FinerScaleShare * scale)
+  {
+    std::vector<Core> more = coresAt(finer);
+    if (more.size() > std::max<size_t>(1, cores.size()))
+    {
+      std::vector<uint16_t> finerLabels(n, 0);
+      LabelByNearestCore(piece, more, finerLabels.data());
+      if (SheetsLieApart(values, piece, more, finerLabels, thinnest / sigma))
+      {
+        cores = std::move(more);
+        std::copy(finerLabels.begin(), finerLabels.end(), out);
+      }
+    }
+  }
   if (cores.size() < 2)
   {
     return whole();
   }
-  std::sort(
-    cores.begin(), cores.end(), [](const Core & a, const Core & b) { return a.Voxels.size() > b.Voxels.size(); });
-  LabelByNearestCore(piece, cores, out);
   result.Sheets = static_cast<unsigned int>(cores.size());
   return result;
 }

@@ -21,6 +21,8 @@
 
 #include "gtest/gtest.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -132,6 +134,53 @@ TEST(TouchingSheetSplitter, OneSheetStaysWhole)
       ASSERT_EQ(split.Labels->GetBufferPointer()[v], scene.Truth[v] != 0 ? 1 : 0);
     }
   }
+}
+
+// Four pages 2.5 voxels apart whose gaps the mask fills (a noisy scan thresholded after
+// smoothing): the piece is a slab as thick as the four with their gaps, and the scale its
+// thickness sets sees one plate or two. Given the scan's thinnest sheet (a page lying apart
+// elsewhere), the piece is split again at that sheet's scale, into the four pages.
+TEST(TouchingSheetSplitter, FusedPagesAreSplitAtTheThinnestSheetsScale)
+{
+  const unsigned seed = std::random_device{}();
+  const Scene    scene = MakeScene({ 10.0, 15.0, 20.0, 25.0 }, 2.5, 0.0, seed);
+  auto           slab = PieceImage::New();
+  slab->SetRegions(scene.Piece->GetBufferedRegion());
+  slab->Allocate();
+  const auto size = slab->GetBufferedRegion().GetSize();
+  for (size_t v = 0; v < scene.Truth.size(); ++v)
+  {
+    const size_t y = (v / size[0]) % size[1];
+    slab->GetBufferPointer()[v] = scene.Truth[v] != 0 || (y > 10 && y < 25) ? 1 : 0;
+  }
+  const auto split = itk::SplitTouchingSheets(scene.Values, slab, 1.0, 200, 2.5);
+  ASSERT_EQ(split.Sheets, 4u) << "seed " << seed;
+  // Each page's voxels carry one label, each its own.
+  std::vector<std::array<size_t, 5>> counts(5, std::array<size_t, 5>{});
+  for (size_t v = 0; v < scene.Truth.size(); ++v)
+  {
+    ++counts[scene.Truth[v]][split.Labels->GetBufferPointer()[v]];
+  }
+  std::vector<bool> taken(5, false);
+  for (int page = 1; page <= 4; ++page)
+  {
+    const auto & row = counts[page];
+    const auto   label = std::max_element(row.begin() + 1, row.end()) - row.begin();
+    EXPECT_FALSE(taken[label]) << "seed " << seed << ": two pages share label " << label;
+    taken[label] = true;
+    const size_t total = row[1] + row[2] + row[3] + row[4];
+    EXPECT_GE(static_cast<double>(row[label]) / static_cast<double>(total), 0.95)
+      << "seed " << seed << ", page " << page;
+  }
+}
+
+// A thick sheet in a scan whose thinnest sheet is much thinner: its two faces are not
+// split into two sheets at the thinner sheet's scale.
+TEST(TouchingSheetSplitter, AThickSheetStaysWholeAtAThinnerSheetsScale)
+{
+  const unsigned seed = std::random_device{}();
+  const Scene    scene = MakeScene({ 15.0 }, 7.0, 4.0, seed);
+  EXPECT_EQ(itk::SplitTouchingSheets(scene.Values, scene.Piece, 1.0, 200, 2.5).Sheets, 1u) << "seed " << seed;
 }
 
 // The other sheets' voxels and their blurred faces hold the background; this sheet's and
