@@ -89,6 +89,9 @@ constexpr double PathsPreference = 0.02;
 // A roll's slices keep traces that turn, at their median, at least this share of the seed
 // slice's turns.
 constexpr double KeptTurnsShare = 0.5;
+// ... and find the sheet, over every slice with material, on at least this share of their
+// steps.
+constexpr double RollConfirmedShare = 0.5;
 
 // Angular steps that make `arc` mm along a trace at radius rho (at least a voxel).
 double
@@ -866,7 +869,16 @@ TraceRoll(const SheetVolumeView &             volume,
       keptTurns.push_back(slice.Turns);
     }
   }
-  result.Rolled = result.Rolled && !keptTurns.empty() && Median(keptTurns) >= KeptTurnsShare * turns;
+  // Nor is it a roll when the slices' traces, over every slice with material, find the sheet
+  // on fewer than half of their steps (a trace that steps from page to page around a block
+  // of fused pages is carried across their ends and gaps).
+  double confirmed = 0.0;
+  for (size_t k : material)
+  {
+    confirmed += result.Slices[k].Line.empty() ? 0.0 : result.Slices[k].Confirmed;
+  }
+  result.Rolled = result.Rolled && !keptTurns.empty() && Median(keptTurns) >= KeptTurnsShare * turns &&
+                  confirmed >= RollConfirmedShare * static_cast<double>(material.size());
   progress(1.0);
   return result;
 }
