@@ -298,10 +298,11 @@ private:
     std::vector<ImageRegion<3>> Boxes;
     std::vector<SizeValueType>  Sizes;
     std::vector<uint8_t>        Done;
-    /** With every sheet: the thinnest of the large pieces' thicknesses (mm; 0: not measured),
-     * a page's where a book's pages lie apart in places, which the splitter's scale heeds
-     * where pages fused into one piece make it thicker. */
-    double ThinnestSheet{ 0.0 };
+    /** The thinnest of the large pieces' thicknesses (mm; 0: none measured), a page's where a
+     * book's pages lie apart in places, which the splitter's scale heeds where pages fused
+     * into one piece make it thicker. Measured when a piece is first split (negative until
+     * then): a roll never needs it. */
+    double ThinnestSheet{ -1.0 };
   };
   /** The sheet made of the pieces of `source` (the labels, or a piece split into the sheets
    * that touch in it) whose labels are kept: their box read, aligned with the roll axis,
@@ -321,7 +322,7 @@ private:
    * along the dip of the plate measure between them (SplitTouchingSheets) and mesh each;
    * otherwise `whole` alone. */
   std::vector<Sheet>
-  SplitSheet(const Pieces &             pieces,
+  SplitSheet(Pieces &                   pieces,
              SizeValueType              piece,
              Sheet &                    whole,
              double                     minimumCoreVoxels,

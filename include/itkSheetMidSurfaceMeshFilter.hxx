@@ -110,14 +110,6 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::GenerateData()
       pieces.Boxes[l] = statistics->GetRegion(l);
     }
   }
-  for (SizeValueType l = 1; m_EverySheet && l <= std::min<SizeValueType>(pieces.Objects, ThicknessPieces); ++l)
-  {
-    if (static_cast<double>(pieces.Sizes[l - 1]) >= ThicknessPieceShare * static_cast<double>(pieces.Sizes[0]))
-    {
-      const double t = PlateThickness(labels, pieces.Boxes[l], [l](LabelPixelType label) { return label == l; });
-      pieces.ThinnestSheet = pieces.ThinnestSheet > 0.0 ? std::min(pieces.ThinnestSheet, t) : t;
-    }
-  }
   const auto & spacing = mask->GetSpacing();
   const double voxelVolume = spacing[0] * spacing[1] * spacing[2];
 
@@ -414,7 +406,7 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::MeshSheetFrom(Pieces &      
 
 template <typename TMaskImage, typename TOutputMesh>
 auto
-SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::SplitSheet(const Pieces &             pieces,
+SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::SplitSheet(Pieces &                   pieces,
                                                                SizeValueType              piece,
                                                                Sheet &                    whole,
                                                                double                     minimumCoreVoxels,
@@ -445,6 +437,21 @@ SheetMidSurfaceMeshFilter<TMaskImage, TOutputMesh>::SplitSheet(const Pieces &   
     pieceMask->SetPixel(it.GetIndex(), on ? 1 : 0);
     values->SetPixel(it.GetIndex(),
                      pieces.Intensity != nullptr ? pieces.Intensity->GetPixel(it.GetIndex()) : (on ? 1.0f : 0.0f));
+  }
+  // The scan's thinnest sheet, measured once, when a piece is first split.
+  if (pieces.ThinnestSheet < 0.0)
+  {
+    double thinnest = 0.0;
+    for (SizeValueType l = 1; l <= std::min<SizeValueType>(pieces.Objects, ThicknessPieces); ++l)
+    {
+      if (static_cast<double>(pieces.Sizes[l - 1]) >= ThicknessPieceShare * static_cast<double>(pieces.Sizes[0]))
+      {
+        const double t =
+          PlateThickness(pieces.Labels, pieces.Boxes[l], [l](LabelPixelType label) { return label == l; });
+        thinnest = thinnest > 0.0 ? std::min(thinnest, t) : t;
+      }
+    }
+    pieces.ThinnestSheet = thinnest;
   }
   const auto &             spacing = pieces.Labels->GetSpacing();
   const double             sigma = std::min({ spacing[0], spacing[1], spacing[2] });

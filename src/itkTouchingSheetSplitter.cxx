@@ -414,6 +414,26 @@ LabelByNearestCore(const PieceImage * piece, const std::vector<Core> & cores, ui
     out[v] = in[v] != 0 ? static_cast<uint16_t>(voronoi[v]) : 0;
   }
 }
+// `visit` on each face-neighbour of voxel v (an offset in a region of `size`) inside the
+// region, until it returns false; whether it never did.
+template <typename TVisit>
+bool
+EveryFaceNeighbour(const Size<3> & size, SizeValueType v, TVisit visit)
+{
+  const SizeValueType strides[3] = { 1, size[0], size[0] * size[1] };
+  SizeValueType       rest = v;
+  for (int d = 2; d >= 0; --d)
+  {
+    const SizeValueType at = rest / strides[d];
+    rest %= strides[d];
+    if ((at > 0 && !visit(v - strides[d])) || (at + 1 < size[d] && !visit(v + strides[d])))
+    {
+      return false;
+    }
+  }
+  return true;
+}
+
 // Whether every two of the sheets labelled in `labels` that meet (the piece's voxels with a
 // face-neighbour in the piece labelled with the other) lie apart: they meet over less than
 // FusedShare of the smaller one's footprint (its voxels over `thickness` voxels: pages with
@@ -433,7 +453,6 @@ SheetsLieApart(const Image<float, 3> *       values,
   const SizeValueType                                         n = piece->GetBufferedRegion().GetNumberOfPixels();
   const uint8_t *                                             in = piece->GetBufferPointer();
   const float *                                               value = values->GetBufferPointer();
-  const SizeValueType                                         strides[3] = { 1, size[0], size[0] * size[1] };
   std::vector<float>                                          core, air;
   std::vector<SizeValueType>                                  voxels(cores.size() + 1, 0);
   std::map<std::pair<uint16_t, uint16_t>, std::vector<float>> meet;
@@ -452,17 +471,11 @@ SheetsLieApart(const Image<float, 3> *       values,
       continue;
     }
     ++voxels[std::min<size_t>(labels[v], cores.size())];
-    SizeValueType rest = v;
-    uint16_t      other = 0;
-    for (int d = 2; d >= 0 && other == 0; --d)
-    {
-      const SizeValueType at = rest / strides[d];
-      rest %= strides[d];
-      for (const SizeValueType u : { at > 0 ? v - strides[d] : v, at + 1 < size[d] ? v + strides[d] : v })
-      {
-        other = other == 0 && in[u] != 0 && labels[u] != labels[v] ? labels[u] : other;
-      }
-    }
+    uint16_t other = 0;
+    EveryFaceNeighbour(size, v, [&](SizeValueType u) {
+      other = in[u] != 0 && labels[u] != labels[v] ? labels[u] : 0;
+      return other == 0;
+    });
     if (other != 0)
     {
       meet[{ std::min(other, labels[v]), std::max(other, labels[v]) }].push_back(value[v]);
@@ -588,26 +601,11 @@ BlankOtherSheets(const Image<float, 3> * volume, const Image<uint16_t, 3> * shee
   const SizeValueType n = volume->GetBufferedRegion().GetNumberOfPixels();
   const float *       in = volume->GetBufferPointer();
   const uint16_t *    label = sheets->GetBufferPointer();
-  const SizeValueType strides[3] = { 1, size[0], size[0] * size[1] };
   // The background: values of unlabelled voxels none of whose face-neighbours is labelled
   // (air, away from the sheets' blurred faces), a sample of them, drawn in a fixed order
   // so that a blanked region has the scan's own noise. A constant would be a patch without
   // noise, whose zero spread a texture's contrast measures take for signal.
-  // `visit` on each face-neighbour of voxel v inside the region, until it returns false;
-  // whether it never did.
-  const auto everyFaceNeighbour = [&](SizeValueType v, auto visit) {
-    SizeValueType rest = v;
-    for (int d = 2; d >= 0; --d)
-    {
-      const SizeValueType at = rest / strides[d];
-      rest %= strides[d];
-      if ((at > 0 && !visit(v - strides[d])) || (at + 1 < size[d] && !visit(v + strides[d])))
-      {
-        return false;
-      }
-    }
-    return true;
-  };
+  const auto everyFaceNeighbour = [&size](SizeValueType v, auto visit) { return EveryFaceNeighbour(size, v, visit); };
   std::vector<float>  air;
   const SizeValueType stride = std::max<SizeValueType>(1, n / 200000);
   for (SizeValueType v = 0; v < n; v += stride)

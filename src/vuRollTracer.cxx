@@ -861,21 +861,18 @@ TraceRoll(const SheetVolumeView &             volume,
   // pressed onto the next, a block of pages fused into one piece) while the slices keep no
   // trace of a roll, or keep only short arcs of one: a roll's slices turn about as often as
   // its seed slice, so the traces kept must turn, at their median, at least half as often.
-  std::vector<double> keptTurns;
-  for (const SliceTrace & slice : result.Slices)
-  {
-    if (!slice.Line.empty())
-    {
-      keptTurns.push_back(slice.Turns);
-    }
-  }
   // Nor is it a roll when the slices' traces, over every slice with material, find the sheet
   // on fewer than half of their steps (a trace that steps from page to page around a block
   // of fused pages is carried across their ends and gaps).
-  double confirmed = 0.0;
+  std::vector<double> keptTurns;
+  double              confirmed = 0.0;
   for (size_t k : material)
   {
-    confirmed += result.Slices[k].Line.empty() ? 0.0 : result.Slices[k].Confirmed;
+    if (!result.Slices[k].Line.empty())
+    {
+      keptTurns.push_back(result.Slices[k].Turns);
+      confirmed += result.Slices[k].Confirmed;
+    }
   }
   result.Rolled = result.Rolled && !keptTurns.empty() && Median(keptTurns) >= KeptTurnsShare * turns &&
                   confirmed >= RollConfirmedShare * static_cast<double>(material.size());
