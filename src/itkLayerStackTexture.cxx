@@ -177,6 +177,13 @@ constexpr double InkCoreSpreads = 4.5;
 // faint letter is the size of the others; a bright band across a roll's sheet, heavier
 // than any blob of the noise, is not).
 constexpr double InkBoxOverCores = 1.5;
+// ... or when it is a few faint letters run together along a line (the lines run along the
+// texture's side across which the strong letters' median box is the taller: letters are
+// taller than wide): across the line, between this share and InkBoxOverCores of the
+// letters' height (a thin band along the sheet is not a line), and along it at most
+// InkRunHeights of that height.
+constexpr double InkRunHeightShare = 0.5;
+constexpr double InkRunHeights = 4.0;
 
 // StrokeContrast's blocks: at least this many pixels long, scored when at least this share
 // of their pixels is on the sheet.
@@ -591,12 +598,16 @@ LayerStackTexture::ClearBackground(const TextureType * texture, bool inkIsBright
     std::nth_element(extents.begin(), extents.begin() + extents.size() / 2, extents.end());
     coreExtent[d] = extents[extents.size() / 2];
   }
+  const unsigned       along = coreExtent[1] >= coreExtent[0] ? 0 : 1, across = 1 - along;
   std::vector<uint8_t> keep(count, 0);
   for (size_t l = 1; l < count; ++l)
   {
     const bool letterSized =
       extent(l, 0) <= InkBoxOverCores * coreExtent[0] && extent(l, 1) <= InkBoxOverCores * coreExtent[1];
-    keep[l] = bright.Peak[l] > InkCoreSpreads || (bright.Mass[l] > darkMass && letterSized) ? 1 : 0;
+    const bool letterRun = extent(l, across) >= InkRunHeightShare * coreExtent[across] &&
+                           extent(l, across) <= InkBoxOverCores * coreExtent[across] &&
+                           extent(l, along) <= InkRunHeights * coreExtent[across];
+    keep[l] = bright.Peak[l] > InkCoreSpreads || (bright.Mass[l] > darkMass && (letterSized || letterRun)) ? 1 : 0;
   }
   const uint32_t * labels = bright.Labels->GetBufferPointer();
   const auto       background = static_cast<float>(median);

@@ -725,6 +725,68 @@ TEST(LayerStackTexture, ClearBackgroundKeepsAFaintLetterThatOutweighsTheNoise)
   EXPECT_EQ(bandKept, 0u);
 }
 
+// Two faint letters run together into one component (as wide as three strong letters), no
+// pixel of it at the ink's core level, on a line of strong letters: a run of letters, kept;
+// a faint band across the lines (taller than a letter) is not. Noise drawn at run time.
+TEST(LayerStackTexture, ClearBackgroundKeepsFaintLettersRunTogether)
+{
+  const unsigned int seed = std::random_device{}();
+  SCOPED_TRACE("noise seed " + std::to_string(seed));
+  std::mt19937                    random(seed);
+  std::normal_distribution<float> noise(0.0f, 1.0f);
+  const unsigned                  columns = 400, rows = 100;
+  // Strong letters 8 pixels wide and 40 tall every 40 pixels, left of the faint run.
+  auto               strong = [](unsigned x, unsigned y) { return y >= 30 && y < 70 && x < 160 && x % 40 < 8; };
+  auto               faint = [](unsigned x, unsigned y) { return y >= 32 && y < 68 && x >= 200 && x < 226; };
+  auto               band = [](unsigned x, unsigned y) { return y >= 4 && y < 96 && x >= 320 && x < 327; };
+  std::vector<float> values(columns * rows);
+  for (auto & v : values)
+  {
+    v = noise(random);
+  }
+  const auto   texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
+    const float v = values[y * columns + x];
+    if (strong(x, y))
+    {
+      return 19.0f + v;
+    }
+    // The faint ink's noise is clipped below the core level: only its mass and shape count.
+    return faint(x, y) ? 11.5f + std::min(v, 2.9f) : band(x, y) ? 12.0f : 10.0f + v;
+  });
+  const double median = LST::Quantiles(texture, { 0.5 })[0];
+  const double spread = LST::NoiseSpread(texture);
+  const auto   cleared = LST::ClearBackground(texture);
+  size_t       faintKept = 0, faintPixels = 0, bandKept = 0, speckle = 0, background = 0;
+  double       faintPeak = 0.0;
+  for (unsigned y = 0; y < rows; ++y)
+  {
+    for (unsigned x = 0; x < columns; ++x)
+    {
+      const itk::Index<2> i = { { long(x), long(y) } };
+      const float         before = texture->GetPixel(i), after = cleared->GetPixel(i);
+      if (faint(x, y))
+      {
+        ++faintPixels;
+        faintKept += after == before ? 1 : 0;
+        faintPeak = std::max(faintPeak, (before - median) / spread);
+      }
+      else if (band(x, y))
+      {
+        bandKept += after == before ? 1 : 0;
+      }
+      else if (!strong(x, y))
+      {
+        ++background;
+        speckle += after != static_cast<float>(median) ? 1 : 0;
+      }
+    }
+  }
+  ASSERT_LT(faintPeak, 4.5);
+  EXPECT_GT(static_cast<double>(faintKept), 0.5 * static_cast<double>(faintPixels));
+  EXPECT_EQ(bandKept, 0u);
+  EXPECT_LT(static_cast<double>(speckle), 0.02 * static_cast<double>(background));
+}
+
 TEST(LayerStackTexture, MedianEqualsTheMedianOfEachWindow)
 {
   // Random values with holes off the sheet, 3 x 3 and 5 x 5 windows: every pixel equals the
