@@ -178,16 +178,18 @@ constexpr double InkCoreSpreads = 4.5;
 // than any blob of the noise, is not).
 constexpr double InkBoxOverCores = 1.5;
 // ... or when it is a few faint letters run together along a line (the lines run along the
-// texture's side across which the strong letters' median box is the taller: letters are
-// taller than wide): across the line, between this share and InkBoxOverCores of the
-// letters' height (a thin band along the sheet is not a line), and along it at most
-// InkRunHeights of that height.
+// texture's longer side, the sheet's length): across the line, between this share and
+// InkBoxOverCores of the letters' height (a thin band along the sheet is not a line), and
+// along it at most InkRunHeights of that height. (The strong letters' own box tells no
+// direction: where they join into words it is wider than tall.)
 constexpr double InkRunHeightShare = 0.5;
 constexpr double InkRunHeights = 4.0;
 
 // StrokeContrast's blocks: at least this many pixels long, scored when at least this share
 // of their pixels is on the sheet.
 constexpr size_t StrokeBlockMinimum = 64;
+// StrokeContrast's rank within a block: strokes cover more of a block than a blot does.
+constexpr double StrokeQuantile = 0.96;
 constexpr double StrokeBlockFiniteShare = 0.25;
 
 // 1.4826 x the median absolute deviation of the ranked values from their `median`.
@@ -424,9 +426,10 @@ LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigm
     return 0.0;
   }
   // Blocks along the texture's longer side, as long as its shorter side, overlapping by
-  // half: the brightest percent of the block richest in strokes over the whole texture's
+  // half: the brightest 5 % of the block richest in strokes over the whole texture's
   // spread. Writing that covers a few per cent of a long sheet fills its blocks' top
-  // percent, where over the whole texture it would not reach the 99th percentile.
+  // 5 %, where over the whole texture it would not reach the 95th percentile; a compact
+  // blot fills its block's top percent but not its top 5 %.
   const auto         size = scored->GetBufferedRegion().GetSize();
   const bool         alongX = size[0] >= size[1];
   const size_t       length = alongX ? size[0] : size[1], across = alongX ? size[1] : size[0];
@@ -450,7 +453,8 @@ LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigm
     }
     if (static_cast<double>(values.size()) >= StrokeBlockFiniteShare * static_cast<double>(block * across))
     {
-      const auto top = values.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(values.size() - 1));
+      const auto top =
+        values.begin() + static_cast<std::ptrdiff_t>(StrokeQuantile * static_cast<double>(values.size() - 1));
       std::nth_element(values.begin(), top, values.end());
       best = std::max(best, (static_cast<double>(*top) - median) / spread);
     }
@@ -598,7 +602,8 @@ LayerStackTexture::ClearBackground(const TextureType * texture, bool inkIsBright
     std::nth_element(extents.begin(), extents.begin() + extents.size() / 2, extents.end());
     coreExtent[d] = extents[extents.size() / 2];
   }
-  const unsigned       along = coreExtent[1] >= coreExtent[0] ? 0 : 1, across = 1 - along;
+  const auto           size = texture->GetBufferedRegion().GetSize();
+  const unsigned       along = size[0] >= size[1] ? 0 : 1, across = 1 - along;
   std::vector<uint8_t> keep(count, 0);
   for (size_t l = 1; l < count; ++l)
   {
