@@ -661,6 +661,53 @@ TEST(LayerStackTexture, ClearBackgroundKeepsTheInkAndClearsTheSpeckle)
   EXPECT_THROW(LST::ClearBackground(nullptr), itk::ExceptionObject);
 }
 
+// What ClearBackground kept of a texture with strong ink, faint ink and a faint band: the
+// faint and band pixels kept as they were, the faint and band pixels' peak in noise
+// spreads, and the background pixels not cleared to the median.
+struct ClearedCounts
+{
+  size_t FaintKept{ 0 }, FaintPixels{ 0 }, BandKept{ 0 }, Speckle{ 0 }, Background{ 0 };
+  double FaintPeak{ 0.0 }, BandPeak{ 0.0 };
+};
+
+ClearedCounts
+CountCleared(const LST::TextureType *                        texture,
+             const std::function<bool(unsigned, unsigned)> & strong,
+             const std::function<bool(unsigned, unsigned)> & faint,
+             const std::function<bool(unsigned, unsigned)> & band)
+{
+  const double  median = LST::Quantiles(texture, { 0.5 })[0];
+  const double  spread = LST::NoiseSpread(texture);
+  const auto    cleared = LST::ClearBackground(texture);
+  const auto    size = texture->GetBufferedRegion().GetSize();
+  ClearedCounts c;
+  for (unsigned y = 0; y < size[1]; ++y)
+  {
+    for (unsigned x = 0; x < size[0]; ++x)
+    {
+      const itk::Index<2> i = { { long(x), long(y) } };
+      const float         before = texture->GetPixel(i), after = cleared->GetPixel(i);
+      if (faint(x, y))
+      {
+        ++c.FaintPixels;
+        c.FaintKept += after == before ? 1 : 0;
+        c.FaintPeak = std::max(c.FaintPeak, (before - median) / spread);
+      }
+      else if (band(x, y))
+      {
+        c.BandKept += after == before ? 1 : 0;
+        c.BandPeak = std::max(c.BandPeak, (before - median) / spread);
+      }
+      else if (!strong(x, y))
+      {
+        ++c.Background;
+        c.Speckle += after != static_cast<float>(median) ? 1 : 0;
+      }
+    }
+  }
+  return c;
+}
+
 // A faint letter that nowhere reaches the ink's core level (1.5 noise spreads above the
 // background, no pixel of it at 4.5) beside a strong one: it outweighs every blob of the
 // noise below the background and is the strong letter's size, so it is kept; a faint band
@@ -680,49 +727,21 @@ TEST(LayerStackTexture, ClearBackgroundKeepsAFaintLetterThatOutweighsTheNoise)
   {
     v = noise(random);
   }
-  const auto   texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
+  const auto          texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
     if (band(x, y))
     {
       return 12.0f;
     }
     return 10.0f + values[y * columns + x] + (strong(x, y) ? 9.0f : faint(x, y) ? 1.5f : 0.0f);
   });
-  const double median = LST::Quantiles(texture, { 0.5 })[0];
-  const double spread = LST::NoiseSpread(texture);
-  const auto   cleared = LST::ClearBackground(texture);
-  size_t       faintKept = 0, faintPixels = 0, speckle = 0, background = 0, bandKept = 0;
-  double       faintPeak = 0.0, bandPeak = 0.0;
-  for (unsigned y = 0; y < rows; ++y)
-  {
-    for (unsigned x = 0; x < columns; ++x)
-    {
-      const itk::Index<2> i = { { long(x), long(y) } };
-      const float         before = texture->GetPixel(i), after = cleared->GetPixel(i);
-      if (faint(x, y))
-      {
-        ++faintPixels;
-        faintKept += after == before ? 1 : 0;
-        faintPeak = std::max(faintPeak, (before - median) / spread);
-      }
-      else if (band(x, y))
-      {
-        bandKept += after == before ? 1 : 0;
-        bandPeak = std::max(bandPeak, (before - median) / spread);
-      }
-      else if (!strong(x, y))
-      {
-        ++background;
-        speckle += after != static_cast<float>(median) ? 1 : 0;
-      }
-    }
-  }
+  const ClearedCounts c = CountCleared(texture, strong, faint, band);
   // The faint letter has no pixel at the core's level: only its mass can keep it.
-  ASSERT_LT(faintPeak, 4.5);
-  ASSERT_LT(bandPeak, 4.5);
+  ASSERT_LT(c.FaintPeak, 4.5);
+  ASSERT_LT(c.BandPeak, 4.5);
   // Its pixels above one spread (about 70 %) are kept.
-  EXPECT_GT(static_cast<double>(faintKept), 0.6 * static_cast<double>(faintPixels));
-  EXPECT_LT(static_cast<double>(speckle), 0.02 * static_cast<double>(background));
-  EXPECT_EQ(bandKept, 0u);
+  EXPECT_GT(static_cast<double>(c.FaintKept), 0.6 * static_cast<double>(c.FaintPixels));
+  EXPECT_LT(static_cast<double>(c.Speckle), 0.02 * static_cast<double>(c.Background));
+  EXPECT_EQ(c.BandKept, 0u);
 }
 
 // Two faint letters run together into one component (as wide as three strong letters), no
@@ -744,7 +763,7 @@ TEST(LayerStackTexture, ClearBackgroundKeepsFaintLettersRunTogether)
   {
     v = noise(random);
   }
-  const auto   texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
+  const auto          texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
     const float v = values[y * columns + x];
     if (strong(x, y))
     {
@@ -753,38 +772,11 @@ TEST(LayerStackTexture, ClearBackgroundKeepsFaintLettersRunTogether)
     // The faint ink's noise is clipped below the core level: only its mass and shape count.
     return faint(x, y) ? 11.5f + std::min(v, 2.9f) : band(x, y) ? 12.0f : 10.0f + v;
   });
-  const double median = LST::Quantiles(texture, { 0.5 })[0];
-  const double spread = LST::NoiseSpread(texture);
-  const auto   cleared = LST::ClearBackground(texture);
-  size_t       faintKept = 0, faintPixels = 0, bandKept = 0, speckle = 0, background = 0;
-  double       faintPeak = 0.0;
-  for (unsigned y = 0; y < rows; ++y)
-  {
-    for (unsigned x = 0; x < columns; ++x)
-    {
-      const itk::Index<2> i = { { long(x), long(y) } };
-      const float         before = texture->GetPixel(i), after = cleared->GetPixel(i);
-      if (faint(x, y))
-      {
-        ++faintPixels;
-        faintKept += after == before ? 1 : 0;
-        faintPeak = std::max(faintPeak, (before - median) / spread);
-      }
-      else if (band(x, y))
-      {
-        bandKept += after == before ? 1 : 0;
-      }
-      else if (!strong(x, y))
-      {
-        ++background;
-        speckle += after != static_cast<float>(median) ? 1 : 0;
-      }
-    }
-  }
-  ASSERT_LT(faintPeak, 4.5);
-  EXPECT_GT(static_cast<double>(faintKept), 0.5 * static_cast<double>(faintPixels));
-  EXPECT_EQ(bandKept, 0u);
-  EXPECT_LT(static_cast<double>(speckle), 0.02 * static_cast<double>(background));
+  const ClearedCounts c = CountCleared(texture, strong, faint, band);
+  ASSERT_LT(c.FaintPeak, 4.5);
+  EXPECT_GT(static_cast<double>(c.FaintKept), 0.5 * static_cast<double>(c.FaintPixels));
+  EXPECT_EQ(c.BandKept, 0u);
+  EXPECT_LT(static_cast<double>(c.Speckle), 0.02 * static_cast<double>(c.Background));
 }
 
 TEST(LayerStackTexture, MedianEqualsTheMedianOfEachWindow)
