@@ -56,14 +56,14 @@ namespace itk {
  *   Smooth(6 strokeSigma): letters' strokes are kept, the sheet's slow changes of
  *   brightness (a slab drifting towards a face, the sheet's edges) and pixel noise are not,
  *   so among focal slabs of a noisy scan the one that shows the writing scores highest.
- *   The band's 95th percentile is taken block by block along the texture's longer side
+ *   The band's 96th percentile is taken block by block along the texture's longer side
  *   (blocks as long as the shorter side, at least 64 pixels, overlapping by half, scored
  *   when a quarter of their pixels is on the sheet), and the highest, less the whole
  *   band's median, over its spread (1.4826 median absolute deviation) is the score: a
- *   few lines of writing on a long sheet fill the top 5 % of their blocks but not of
- *   the whole texture, and a compact blot (a bulge's flank, a blanked patch's rim) fills
- *   the top percent of its block but not the top 5 %. Pixels within 6 strokeSigma of the sheet's border, where the band
- *   rings, are not scored. With `leaveOut` (a texture of the same size), the pixels where
+ *   few lines of writing on a long sheet fill the top 4 % of their blocks but not of the
+ *   whole texture, and a compact blot (a bulge's flank, a blanked patch's rim) fills the
+ *   top percent of its block but not the top 4 %. Pixels within 6 strokeSigma of the
+ *   sheet's border, where the band rings, are not scored. With `leaveOut` (a texture of the same size), the pixels where
  *   it is not finite are left out of the score (not of the filtering): where the sheet
  *   is off the surface the stack was sampled about, or another sheet touches it.
  * - Quantiles(): the values of the finite pixels at the given ranks q (0..1; the value
@@ -88,8 +88,8 @@ namespace itk {
  *   the noise) while their box is at most 1.5 times the median height, and width, of the
  *   components of the first kind, or while they are faint letters run together along a
  *   line (the lines run along the texture's longer side: 0.5 to 1.5 times those
- *   components' height across it, at most 4 times it along it). A letter's faint parts are kept with its strong ones; a
- *   faint letter that nowhere reaches 4.5 spreads but outweighs every blob of the noise is
+ *   components' height across it, at most 4 times it along it). A letter's faint parts
+ *   are kept with its strong ones; a faint letter that nowhere reaches 4.5 spreads but outweighs every blob of the noise is
  *   kept whole (the noise makes blobs on both sides alike, the ink on one side only, so
  *   the other side measures the noise's largest blob in this very texture: high over a
  *   long sheet, low over a small page), and a faint band across a sheet, larger than any

@@ -426,10 +426,10 @@ LayerStackTexture::StrokeContrast(const TextureType * texture, double strokeSigm
     return 0.0;
   }
   // Blocks along the texture's longer side, as long as its shorter side, overlapping by
-  // half: the brightest 5 % of the block richest in strokes over the whole texture's
-  // spread. Writing that covers a few per cent of a long sheet fills its blocks' top
-  // 5 %, where over the whole texture it would not reach the 95th percentile; a compact
-  // blot fills its block's top percent but not its top 5 %.
+  // half: the brightest 4 % (StrokeQuantile) of the block richest in strokes over the
+  // whole texture's spread. Writing that covers a few per cent of a long sheet fills its
+  // blocks' top 4 %, where over the whole texture it would not reach that rank; a compact
+  // blot fills its block's top percent but not its top 4 %.
   const auto         size = scored->GetBufferedRegion().GetSize();
   const bool         alongX = size[0] >= size[1];
   const size_t       length = alongX ? size[0] : size[1], across = alongX ? size[1] : size[0];

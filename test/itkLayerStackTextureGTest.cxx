@@ -62,6 +62,19 @@ MakeStack(unsigned                                                   columns,
   return stack;
 }
 
+// `count` values drawn from `distribution` (a texture's noise, pixel by pixel).
+template <typename Distribution>
+std::vector<float>
+Draw(size_t count, Distribution & distribution, std::mt19937 & random)
+{
+  std::vector<float> values(count);
+  for (auto & v : values)
+  {
+    v = distribution(random);
+  }
+  return values;
+}
+
 TextureType::Pointer
 MakeTexture(unsigned columns, unsigned rows, double pixel, const std::function<float(unsigned, unsigned)> & f)
 {
@@ -607,13 +620,9 @@ TEST(LayerStackTexture, ClearBackgroundKeepsTheInkAndClearsTheSpeckle)
   const unsigned                  columns = 400, rows = 100;
   // Vertical strokes 4 pixels wide (+9) every 40 pixels, each with a faint tail (+4, as
   // far above the background as the noise often reaches) to its right.
-  auto               strong = [](unsigned x, unsigned y) { return y >= 30 && y < 70 && x % 40 < 4; };
-  auto               faint = [](unsigned x, unsigned y) { return y >= 45 && y < 49 && x % 40 >= 4 && x % 40 < 14; };
-  std::vector<float> values(columns * rows);
-  for (auto & v : values)
-  {
-    v = noise(random);
-  }
+  auto strong = [](unsigned x, unsigned y) { return y >= 30 && y < 70 && x % 40 < 4; };
+  auto faint = [](unsigned x, unsigned y) { return y >= 45 && y < 49 && x % 40 >= 4 && x % 40 < 14; };
+  const std::vector<float> values = Draw(columns * rows, noise, random);
   for (const bool bright : { true, false })
   {
     const float sign = bright ? 1.0f : -1.0f;
@@ -721,20 +730,16 @@ TEST(LayerStackTexture, ClearBackgroundKeepsAFaintLetterThatOutweighsTheNoise)
   auto faint = [](unsigned x, unsigned y) { return y >= 32 && y < 68 && x >= 200 && x < 207; };
   // A band across the texture (2 spreads above the background, without noise: one piece),
   // eight times as long as the strong ink.
-  auto               band = [](unsigned x, unsigned y) { return y >= 86 && y < 90 && x >= 40 && x < 360; };
-  std::vector<float> values(columns * rows);
-  for (auto & v : values)
-  {
-    v = noise(random);
-  }
-  const auto          texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
+  auto                     band = [](unsigned x, unsigned y) { return y >= 86 && y < 90 && x >= 40 && x < 360; };
+  const std::vector<float> values = Draw(columns * rows, noise, random);
+  const auto               texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
     if (band(x, y))
     {
       return 12.0f;
     }
     return 10.0f + values[y * columns + x] + (strong(x, y) ? 9.0f : faint(x, y) ? 1.5f : 0.0f);
   });
-  const ClearedCounts c = CountCleared(texture, strong, faint, band);
+  const ClearedCounts      c = CountCleared(texture, strong, faint, band);
   // The faint letter has no pixel at the core's level: only its mass can keep it.
   ASSERT_LT(c.FaintPeak, 4.5);
   ASSERT_LT(c.BandPeak, 4.5);
@@ -755,15 +760,11 @@ TEST(LayerStackTexture, ClearBackgroundKeepsFaintLettersRunTogether)
   std::normal_distribution<float> noise(0.0f, 1.0f);
   const unsigned                  columns = 400, rows = 100;
   // Strong letters 8 pixels wide and 40 tall every 40 pixels, left of the faint run.
-  auto               strong = [](unsigned x, unsigned y) { return y >= 30 && y < 70 && x < 160 && x % 40 < 8; };
-  auto               faint = [](unsigned x, unsigned y) { return y >= 32 && y < 68 && x >= 200 && x < 226; };
-  auto               band = [](unsigned x, unsigned y) { return y >= 4 && y < 96 && x >= 320 && x < 327; };
-  std::vector<float> values(columns * rows);
-  for (auto & v : values)
-  {
-    v = noise(random);
-  }
-  const auto          texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
+  auto                     strong = [](unsigned x, unsigned y) { return y >= 30 && y < 70 && x < 160 && x % 40 < 8; };
+  auto                     faint = [](unsigned x, unsigned y) { return y >= 32 && y < 68 && x >= 200 && x < 226; };
+  auto                     band = [](unsigned x, unsigned y) { return y >= 4 && y < 96 && x >= 320 && x < 327; };
+  const std::vector<float> values = Draw(columns * rows, noise, random);
+  const auto               texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
     const float v = values[y * columns + x];
     if (strong(x, y))
     {
@@ -772,7 +773,7 @@ TEST(LayerStackTexture, ClearBackgroundKeepsFaintLettersRunTogether)
     // The faint ink's noise is clipped below the core level: only its mass and shape count.
     return faint(x, y) ? 11.5f + std::min(v, 2.9f) : band(x, y) ? 12.0f : 10.0f + v;
   });
-  const ClearedCounts c = CountCleared(texture, strong, faint, band);
+  const ClearedCounts      c = CountCleared(texture, strong, faint, band);
   ASSERT_LT(c.FaintPeak, 4.5);
   EXPECT_GT(static_cast<double>(c.FaintKept), 0.5 * static_cast<double>(c.FaintPixels));
   EXPECT_EQ(c.BandKept, 0u);
