@@ -24,6 +24,7 @@
 #include "itkImageRegionConstIterator.h"
 #include "itkImageRegionIteratorWithIndex.h"
 #include "vuExpectRefusal.h"
+#include "vuTestHelpers.h"
 #include "vuVoxelCount.h"
 
 #include <gtest/gtest.h>
@@ -85,7 +86,7 @@ protected:
   void
   SetUp() override
   {
-    const unsigned seed = std::random_device{}();
+    const unsigned seed = vu::RunTimeSeed();
     std::cout << "volume package drawn with seed " << seed << std::endl;
     std::mt19937 random(seed);
     auto draw = [&](unsigned low, unsigned high) { return std::uniform_int_distribution<unsigned>(low, high)(random); };
@@ -207,7 +208,7 @@ TEST_F(VolumePackage, AMissingSliceOrVoxelSizeIsRefused)
 
 TEST(CTVolumeReaderHDF5, AnHdf5VolumeIsReadWithItsGeometryAndARegionOfInterest)
 {
-  const unsigned seed = std::random_device{}();
+  const unsigned seed = vu::RunTimeSeed();
   std::cout << "HDF5 volume drawn with seed " << seed << std::endl;
   std::mt19937 random(seed);
   auto uniform = [&](double low, double high) { return std::uniform_real_distribution<double>(low, high)(random); };

@@ -754,7 +754,7 @@ TEST(LayerStackTexture, ClearBackgroundKeepsAFaintLetterThatOutweighsTheNoise)
 // a faint band across the lines (taller than a letter) is not. Noise drawn at run time.
 TEST(LayerStackTexture, ClearBackgroundKeepsFaintLettersRunTogether)
 {
-  const unsigned int seed = std::random_device{}();
+  const unsigned int seed = vu::RunTimeSeed();
   SCOPED_TRACE("noise seed " + std::to_string(seed));
   std::mt19937                    random(seed);
   std::normal_distribution<float> noise(0.0f, 1.0f);
@@ -827,7 +827,7 @@ TEST(LayerStackTexture, SmoothEqualsTheNormalisedConvolutionOfEachPixel)
 {
   // Random values with holes, anisotropic pixels: every pixel equals the Gaussian-weighted
   // mean of the finite values about it (weights separable, three sigmas each way).
-  std::mt19937                          random(std::random_device{}());
+  std::mt19937                          random(vu::RunTimeSeed());
   std::uniform_real_distribution<float> value(-50.0f, 200.0f);
   const auto                            texture = MakeTexture(29, 31, 0.5, [&](unsigned x, unsigned y) {
     const float v = value(random);
@@ -868,7 +868,7 @@ TEST(LayerStackTexture, RankMeasuresAreThoseOfTheSortedFiniteValues)
   // Random textures (seed drawn each run) of wide and narrow ranges, repeated values, signed
   // zeros, NaN and infinities: the ink contrast and the noise spread are those computed from
   // the sorted finite values.
-  const unsigned int seed = std::random_device{}();
+  const unsigned int seed = vu::RunTimeSeed();
   std::mt19937       random(seed);
   SCOPED_TRACE("seed " + std::to_string(seed));
   constexpr float                         Inf = std::numeric_limits<float>::infinity();

@@ -190,9 +190,7 @@ TEST(ReadableTextureImageFilter, FocalSlabsOnANoisyScan)
 // are drawn at run time.
 TEST(ReadableTextureImageFilter, AnotherSheetTouchingIsNotTakenForWriting)
 {
-  const unsigned seed = std::random_device{}();
-  std::mt19937   random(seed);
-  std::cout << "seed " << seed << std::endl;
+  std::mt19937           random(vu::RunTimeSeed());
   constexpr unsigned int Layers = 9;
   constexpr long         Columns = 160, Rows = 100;
   const bool             inkPositive = std::bernoulli_distribution(0.5)(random);
@@ -213,7 +211,7 @@ TEST(ReadableTextureImageFilter, AnotherSheetTouchingIsNotTakenForWriting)
     {
       for (long x = x0; x < x0 + 14; ++x)
       {
-        const bool bar = (x - x0 < 2) || (y - y0 < 2) || (letter % 2 == 0 && y - y0 >= 9 && y - y0 < 11);
+        const bool bar = (x - x0 < 3) || (y - y0 < 3) || (letter % 2 == 0 && y - y0 >= 9 && y - y0 < 12);
         ink[y * Columns + x] |= bar ? 1 : 0;
       }
     }
@@ -265,13 +263,21 @@ TEST(ReadableTextureImageFilter, AnotherSheetTouchingIsNotTakenForWriting)
   EXPECT_GT(touched.PixelsLeftOut, 0u);
   EXPECT_LT(touched.PixelsLeftOut, static_cast<size_t>(0.25 * Columns * Rows));
   EXPECT_EQ(alone.PixelsLeftOut, 0u);
-  // The chosen slab lies on the ink's side of the middle, as without the other sheet.
+  // The chosen slab holds inked layers and its middle does not lie on the other sheet's
+  // side, as without the other sheet. (A slab centred on the middle layer may win: five
+  // layers holding both inked ones halve the noise.)
+  const unsigned int inkFirst = inkPositive ? Layers - 4 : 2;
+  const auto         holdsTheInk = [&](const itk::ReadableTextureSelection & selection) {
+    const auto & chosen = selection.ChosenCandidate();
+    return chosen.First <= inkFirst + 1 && chosen.First + chosen.Count > inkFirst &&
+           (inkPositive ? selection.Depth >= 0.0 : selection.Depth <= 0.0);
+  };
   const auto & chosen = touched.ChosenCandidate();
   std::cout << "ink on the " << (inkPositive ? "positive" : "negative") << " side; disc r " << r << "; chosen layers "
             << chosen.First << " + " << chosen.Count << " (alone: " << alone.ChosenCandidate().First << " + "
             << alone.ChosenCandidate().Count << "), " << touched.PixelsLeftOut << " pixels left out" << std::endl;
-  EXPECT_EQ(touched.Depth > 0.0, inkPositive);
-  EXPECT_EQ(alone.Depth > 0.0, inkPositive);
+  EXPECT_TRUE(holdsTheInk(touched));
+  EXPECT_TRUE(holdsTheInk(alone));
 }
 
 // A side given: one candidate per core choice asked for; restoration replaces the Gaussian.

@@ -18,6 +18,7 @@
 #include "itkSheetMesh.h"
 
 #include "itkMacro.h"
+#include "vuTestHelpers.h"
 
 #include "gtest/gtest.h"
 
@@ -199,7 +200,7 @@ TEST(SheetMesh, GridLayoutOfACylinderIsIsometric)
 // the rows would be wrong by a seventh or more.
 TEST(SheetMesh, GridLayoutOfASkewedGridKeepsItsShear)
 {
-  const unsigned seed = std::random_device{}();
+  const unsigned seed = vu::RunTimeSeed();
   std::mt19937   random(seed);
   auto uniform = [&](double low, double high) { return std::uniform_real_distribution<double>(low, high)(random); };
   const double radius = uniform(5.0, 15.0);

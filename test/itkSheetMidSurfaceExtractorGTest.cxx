@@ -557,7 +557,7 @@ TEST(SheetMidSurfaceExtractor, OffSheetRunsNameAMeshTracedBetweenTurns)
 // (midpoint 1.5 to 4 noise widths above the air).
 TEST(SheetMidSurfaceExtractor, IntensityLevelsOfASmallSheetAreNotASplitOfTheAirsNoise)
 {
-  const unsigned int seed = std::random_device{}();
+  const unsigned int seed = vu::RunTimeSeed();
   std::mt19937       random(seed);
   SCOPED_TRACE("seed " + std::to_string(seed));
   for (int trial = 0; trial < 8; ++trial)

@@ -351,7 +351,7 @@ TEST(SheetMidSurfaceMeshFilter, EverySheetIsMeshedAndSpecksAreCounted)
   AddFlatSheet(mask, 4, 55, 8);   // 52 voxels long
   AddFlatSheet(mask, 4, 45, 20);  // 42
   AddFlatSheet(mask, 10, 45, 32); // 36
-  std::mt19937 random(static_cast<unsigned>(std::random_device{}()));
+  std::mt19937 random(vu::RunTimeSeed());
   unsigned     specks = 0;
   for (int i = 0; i < 40; ++i)
   {
@@ -471,7 +471,7 @@ TEST(SheetMidSurfaceMeshFilter, AnUntraceableLargestPieceIsDroppedAndTheOthersMe
 TEST(SheetMidSurfaceMeshFilter, SpecksWithoutASheetAreRefused)
 {
   auto         mask = MakeMask(60, 14);
-  std::mt19937 random(static_cast<unsigned>(std::random_device{}()));
+  std::mt19937 random(vu::RunTimeSeed());
   for (int i = 0; i < 3000; ++i)
   {
     mask->SetPixel(

@@ -18,6 +18,7 @@
 #include "itkTouchingSheetSplitter.h"
 
 #include "itkDiscreteGaussianImageFilter.h"
+#include "vuTestHelpers.h"
 
 #include "gtest/gtest.h"
 
@@ -102,7 +103,7 @@ MakeScene(const std::vector<double> & middles, double thickness, double bump, un
 // piece of the mask, split into the two sheets; every voxel of each goes to its own.
 TEST(TouchingSheetSplitter, FusedSheetsAreSplitBetweenThem)
 {
-  const unsigned seed = std::random_device{}();
+  const unsigned seed = vu::RunTimeSeed();
   const Scene    scene = MakeScene({ 12.0, 17.0 }, 3.0, 2.25, seed);
   const auto     split = itk::SplitTouchingSheets(scene.Values, scene.Piece, 1.0, 200);
   ASSERT_EQ(split.Sheets, 2u) << "seed " << seed;
@@ -123,7 +124,7 @@ TEST(TouchingSheetSplitter, FusedSheetsAreSplitBetweenThem)
 // One sheet, bent, thin or thick (its two faces are not two sheets): never split.
 TEST(TouchingSheetSplitter, OneSheetStaysWhole)
 {
-  const unsigned seed = std::random_device{}();
+  const unsigned seed = vu::RunTimeSeed();
   for (const double thickness : { 3.0, 7.0 })
   {
     const Scene scene = MakeScene({ 15.0 }, thickness, 4.0, seed);
@@ -142,7 +143,7 @@ TEST(TouchingSheetSplitter, OneSheetStaysWhole)
 // elsewhere), the piece is split again at that sheet's scale, into the four pages.
 TEST(TouchingSheetSplitter, FusedPagesAreSplitAtTheThinnestSheetsScale)
 {
-  const unsigned seed = std::random_device{}();
+  const unsigned seed = vu::RunTimeSeed();
   const Scene    scene = MakeScene({ 10.0, 15.0, 20.0, 25.0 }, 2.5, 0.0, seed);
   auto           slab = PieceImage::New();
   slab->SetRegions(scene.Piece->GetBufferedRegion());
@@ -178,7 +179,7 @@ TEST(TouchingSheetSplitter, FusedPagesAreSplitAtTheThinnestSheetsScale)
 // split into two sheets at the thinner sheet's scale.
 TEST(TouchingSheetSplitter, AThickSheetStaysWholeAtAThinnerSheetsScale)
 {
-  const unsigned seed = std::random_device{}();
+  const unsigned seed = vu::RunTimeSeed();
   const Scene    scene = MakeScene({ 15.0 }, 7.0, 4.0, seed);
   EXPECT_EQ(itk::SplitTouchingSheets(scene.Values, scene.Piece, 1.0, 200, 2.5).Sheets, 1u) << "seed " << seed;
 }

@@ -178,7 +178,7 @@ TEST(ZarrImageIO, EveryStoreIsReadVoxelByVoxel)
 TEST(ZarrImageIO, ARegionReadOpensOnlyTheChunksItOverlaps)
 {
   const Json     manifest = Manifest();
-  const unsigned seed = std::random_device{}();
+  const unsigned seed = vu::RunTimeSeed();
   std::mt19937   random(seed);
   std::cout << "regions drawn with seed " << seed << std::endl;
   for (const Json & store : manifest["stores"])
@@ -398,7 +398,7 @@ WriteStore(const std::string & name, bool compressed, std::mt19937 & random)
 
 TEST(ZarrImageIO, WrittenStoresReadBackVoxelByVoxelWithTheirGeometry)
 {
-  const unsigned seed = std::random_device{}();
+  const unsigned seed = vu::RunTimeSeed();
   std::mt19937   random(seed);
   std::cout << "written stores drawn with seed " << seed << std::endl;
   fs::create_directories(StoreDirectory());

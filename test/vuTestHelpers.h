@@ -23,6 +23,9 @@
 #include "gtest/gtest.h"
 
 #include <cstdlib>
+#include <iostream>
+#include <random>
+#include <string>
 
 /** ITK's testing macros (ITK_EXERCISE_BASIC_OBJECT_METHODS, ITK_TEST_SET_GET_VALUE,
  * ITK_TRY_EXPECT_EXCEPTION, ...) report failure by returning EXIT_FAILURE from the
@@ -46,6 +49,24 @@ Triple(double x, double y, double z)
   t[1] = y;
   t[2] = z;
   return t;
+}
+
+/** A seed for a test that draws its scene at run time: VU_TEST_SEED when set (to replay a
+ * run that failed), otherwise drawn from std::random_device. It is printed either way. */
+inline unsigned int
+RunTimeSeed()
+{
+  unsigned int seed = 0;
+  if (const char * given = std::getenv("VU_TEST_SEED"))
+  {
+    seed = static_cast<unsigned int>(std::stoul(given));
+  }
+  else
+  {
+    seed = std::random_device{}();
+  }
+  std::cout << "seed " << seed << " (replay: VU_TEST_SEED=" << seed << ")" << std::endl;
+  return seed;
 }
 } // namespace vu
 
