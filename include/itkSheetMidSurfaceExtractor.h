@@ -139,7 +139,8 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
   };
   std::vector<GridStep> GridSteps;
   /** Roll method: grid points put back on their row's curve before the checks (runs of one
-   * or two points off it, SheetMidSurfaceExtractor::SmoothRowSpikes). */
+   * or two points off it, SheetMidSurfaceExtractor::SmoothRowSpikes; bumps towards a
+   * touching turn, SheetMidSurfaceExtractor::SmoothTouchBumps). */
   size_t RowSpikesSmoothed{ 0 };
   /** Roll method, with intensities: runs of grid points along a row that lie in air (the
    * intensity the tracer reads below a quarter of the sheet's contrast above the air's
@@ -318,6 +319,22 @@ public:
    * it on a roll's grid with 0.7 of the turn spacing, before its checks. */
   static size_t
   SmoothRowSpikes(SheetMesh & mesh, double limit);
+
+  /** Puts back on its row's curve each bump where a row is pulled onto a touching turn at
+   * one column: the point at column c leaves the cubic through columns c - 3, c - 2, c + 2
+   * and c + 3 by more than `limit` (mm, in the slice plane), its neighbours c - 1 and c + 1
+   * (pulled part way) by at most half as much as it does (a smooth bend, such as the
+   * innermost curl, leaves it by 1.5 times as much at c as at its sides, not twice);
+   * columns c - 2 and c + 2 each lie within half the limit of the cubic through their own
+   * neighbours (the bump left out); and the point lies nearer the row's nearest other turn
+   * (its polyline beyond four columns of c) than three quarters of the cubic's distance to
+   * it: the bump leans towards that turn. The three columns are set to the cubic. Where
+   * turns press together the next turn lies about a sheet's thickness away, too close for
+   * SmoothRowSpikes' limit of a turn spacing; Extract runs it on a roll's grid after
+   * SmoothRowSpikes, with the sheet's thickness. Returns the number of points moved; the
+   * four columns at either end are left alone. */
+  static size_t
+  SmoothTouchBumps(SheetMesh & mesh, double limit);
 
   /** Runs of at least `minimumRun` grid points along a row (points in the view's frame,
    * mm) where the view's intensity, as a fraction of (sheetLevel - airLevel) above airLevel

@@ -19,8 +19,10 @@
 #include "vuMedian.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace itk {
 namespace {
@@ -58,6 +60,67 @@ ReportRuns(const std::vector<double> & residual, double limit, Report report)
     }
     report(best, std::abs(residual[best]));
   }
+}
+
+// The cubic (Lagrange, in the column index) through the points of `row` at the four
+// columns `x`, at column c.
+void
+RowCubic(const double * row, const std::array<long, 4> & x, long c, double out[3])
+{
+  out[0] = out[1] = out[2] = 0.0;
+  for (int i = 0; i < 4; ++i)
+  {
+    double weight = 1.0;
+    for (int j = 0; j < 4; ++j)
+    {
+      weight *= j == i ? 1.0 : static_cast<double>(c - x[j]) / static_cast<double>(x[i] - x[j]);
+    }
+    for (int d = 0; d < 3; ++d)
+    {
+      out[d] += weight * row[3 * x[i] + d];
+    }
+  }
+}
+
+// Distance in the slice plane from grid point p to q.
+double
+InPlane(const double * p, const double q[3])
+{
+  return std::hypot(p[0] - q[0], p[1] - q[1]);
+}
+
+// Distance in the slice plane from p to the row's polyline, leaving out the segments within
+// four columns of column c (the row's own stretch about it): the nearest other turn.
+double
+DistanceToRow(const double * row, long columns, long c, const double p[3])
+{
+  double nearest = std::numeric_limits<double>::infinity();
+  for (long k = 0; k + 1 < columns; ++k)
+  {
+    if (k + 1 >= c - 4 && k <= c + 4)
+    {
+      continue;
+    }
+    const double * a = row + 3 * k;
+    const double * b = a + 3;
+    const double   ex = b[0] - a[0], ey = b[1] - a[1], length2 = ex * ex + ey * ey;
+    const double   t = length2 > 0.0 ? std::clamp(((p[0] - a[0]) * ex + (p[1] - a[1]) * ey) / length2, 0.0, 1.0) : 0.0;
+    nearest = std::min(nearest, std::hypot(p[0] - a[0] - t * ex, p[1] - a[1] - t * ey));
+  }
+  return nearest;
+}
+
+// A grid's rows and columns, or 0 columns when the mesh is not a whole grid.
+std::pair<size_t, long>
+GridShape(const SheetMesh & mesh)
+{
+  const auto rows = static_cast<size_t>(std::max(0, mesh.GridRows));
+  const auto columns = static_cast<long>(std::max(0, mesh.GridColumns));
+  if (!mesh.IsGridStructured() || rows * static_cast<size_t>(columns) != mesh.GetNumberOfPoints())
+  {
+    return { 0, 0 };
+  }
+  return { rows, columns };
 }
 } // namespace
 
@@ -126,32 +189,15 @@ SheetMidSurfaceExtractor::FindGridSteps(const SheetMesh & mesh, double limit)
 size_t
 SheetMidSurfaceExtractor::SmoothRowSpikes(SheetMesh & mesh, double limit)
 {
-  const auto rows = static_cast<size_t>(std::max(0, mesh.GridRows));
-  const auto columns = static_cast<long>(std::max(0, mesh.GridColumns));
-  if (!mesh.IsGridStructured() || rows * static_cast<size_t>(columns) != mesh.GetNumberOfPoints() || columns < 9 ||
-      !(limit > 0.0))
+  const auto [rows, columns] = GridShape(mesh);
+  if (columns < 9 || !(limit > 0.0))
   {
     return 0;
   }
-  // The cubic (Lagrange, in the column index) through columns a - 2, a - 1, b + 1 and b + 2
-  // of a row, at column c.
+  // The cubic through columns a - 2, a - 1, b + 1 and b + 2 of a row, at column c.
   auto cubic = [](const double * row, long a, long b, long c, double out[3]) {
-    const long x[4] = { a - 2, a - 1, b + 1, b + 2 };
-    out[0] = out[1] = out[2] = 0.0;
-    for (int i = 0; i < 4; ++i)
-    {
-      double weight = 1.0;
-      for (int j = 0; j < 4; ++j)
-      {
-        weight *= j == i ? 1.0 : static_cast<double>(c - x[j]) / static_cast<double>(x[i] - x[j]);
-      }
-      for (int d = 0; d < 3; ++d)
-      {
-        out[d] += weight * row[3 * x[i] + d];
-      }
-    }
+    RowCubic(row, { a - 2, a - 1, b + 1, b + 2 }, c, out);
   };
-  auto   inPlane = [](const double * p, const double q[3]) { return std::hypot(p[0] - q[0], p[1] - q[1]); };
   size_t moved = 0;
   for (size_t r = 0; r < rows; ++r)
   {
@@ -166,7 +212,7 @@ SheetMidSurfaceExtractor::SmoothRowSpikes(SheetMesh & mesh, double limit)
         for (long c = a; c <= b && off; ++c)
         {
           cubic(row, a, b, c, fitted[c - a]);
-          off = inPlane(row + 3 * c, fitted[c - a]) > limit;
+          off = InPlane(row + 3 * c, fitted[c - a]) > limit;
         }
         double before[3], after[3];
         if (!off)
@@ -175,7 +221,7 @@ SheetMidSurfaceExtractor::SmoothRowSpikes(SheetMesh & mesh, double limit)
         }
         cubic(row, a - 1, b, a - 1, before);
         cubic(row, a, b + 1, b + 1, after);
-        if (inPlane(row + 3 * (a - 1), before) > 0.5 * limit || inPlane(row + 3 * (b + 1), after) > 0.5 * limit)
+        if (InPlane(row + 3 * (a - 1), before) > 0.5 * limit || InPlane(row + 3 * (b + 1), after) > 0.5 * limit)
         {
           continue;
         }
@@ -185,6 +231,61 @@ SheetMidSurfaceExtractor::SmoothRowSpikes(SheetMesh & mesh, double limit)
           ++moved;
         }
       }
+    }
+  }
+  return moved;
+}
+
+size_t
+SheetMidSurfaceExtractor::SmoothTouchBumps(SheetMesh & mesh, double limit)
+{
+  const auto [rows, columns] = GridShape(mesh);
+  if (columns < 11 || !(limit > 0.0))
+  {
+    return 0;
+  }
+  size_t moved = 0;
+  for (size_t r = 0; r < rows; ++r)
+  {
+    double * row = mesh.Points.data() + 3 * r * static_cast<size_t>(columns);
+    for (long c = 4; c + 4 < columns; ++c)
+    {
+      // Columns c - 1 .. c + 1 against the cubic through the two columns either side of them.
+      double fitted[3][3];
+      double off[3];
+      for (long k = 0; k < 3; ++k)
+      {
+        RowCubic(row, { c - 3, c - 2, c + 2, c + 3 }, c - 1 + k, fitted[k]);
+        off[k] = InPlane(row + 3 * (c - 1 + k), fitted[k]);
+      }
+      // A peak at c beyond the limit and at least twice as far off as its sides (a smooth
+      // bend, such as the innermost curl, leaves the cubic by at most 1.5 times as much at c
+      // as at its sides).
+      if (!(off[1] > limit) || off[0] > 0.5 * off[1] || off[2] > 0.5 * off[1])
+      {
+        continue;
+      }
+      // The columns either side lie on one smooth curve without the bump.
+      double before[3], after[3];
+      RowCubic(row, { c - 4, c - 3, c + 2, c + 3 }, c - 2, before);
+      RowCubic(row, { c - 3, c - 2, c + 3, c + 4 }, c + 2, after);
+      if (InPlane(row + 3 * (c - 2), before) > 0.5 * limit || InPlane(row + 3 * (c + 2), after) > 0.5 * limit)
+      {
+        continue;
+      }
+      // The bump leans towards the row's nearest other turn, by at least a quarter of the
+      // way: a smaller peak is the trace following the sheet's own unevenness, or noise,
+      // and stays.
+      const double away = DistanceToRow(row, columns, c, fitted[1]);
+      if (!(DistanceToRow(row, columns, c, row + 3 * c) < 0.75 * away))
+      {
+        continue;
+      }
+      for (long k = 0; k < 3; ++k)
+      {
+        std::copy(fitted[k], fitted[k] + 3, row + 3 * (c - 1 + k));
+      }
+      moved += 3;
     }
   }
   return moved;

@@ -715,14 +715,22 @@ Extraction::BuildMesh()
       return static_cast<size_t>(std::clamp(std::lround(z / sz), 0L, static_cast<long>(nz) - 1));
     };
     // A column taken onto the neighbouring turn in one row's slices only (the row's window
-    // holds a touch's edge along the axis) leaves the row's curve for a point or two.
+    // holds a touch's edge along the axis) leaves the row's curve for a point or two, by
+    // about a turn spacing; where the turns press together, the next turn lies about a
+    // sheet's thickness away, and the row bends towards it over three columns.
     m_Report.RowSpikesSmoothed =
       SheetMidSurfaceExtractor::SmoothRowSpikes(mesh, GridStepFraction * m_Report.TurnSpacing);
+    const double touchLimit = std::max(m_Report.SheetThickness, voxel);
+    if (touchLimit < GridStepFraction * m_Report.TurnSpacing)
+    {
+      m_Report.RowSpikesSmoothed += SheetMidSurfaceExtractor::SmoothTouchBumps(mesh, touchLimit);
+    }
     if (m_Report.RowSpikesSmoothed > 0)
     {
       std::ostringstream text;
-      text << m_Report.RowSpikesSmoothed << " grid point(s) off their row's curve by more than " << GridStepFraction
-           << " of the turn spacing for one or two columns (a column on the neighbouring turn) were put back on it";
+      text << m_Report.RowSpikesSmoothed << " grid point(s) off their row's curve for one to three columns (a column "
+           << "on the neighbouring turn: by more than " << GridStepFraction << " of the turn spacing, or by more than "
+           << "the sheet's thickness towards a touching turn) were put back on it";
       m_Report.Warnings.push_back(text.str());
     }
     m_Report.GridSteps = SheetMidSurfaceExtractor::FindGridSteps(mesh, GridStepFraction * m_Report.TurnSpacing);

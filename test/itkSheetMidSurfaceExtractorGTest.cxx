@@ -497,6 +497,86 @@ TEST(SheetMidSurfaceExtractor, RowSpikesArePutBackButARowOnAnotherTurnIsNot)
   EXPECT_FALSE(itk::SheetMidSurfaceExtractor::FindGridSteps(mesh, 0.7 * 6.0).empty());
 }
 
+// Where turns press together, a row pulled onto the touching turn at one column bends
+// towards it over three: the point there leaves the row's curve by more than a sheet's
+// thickness, its neighbours by part of that. Such a bump is put back; a smaller one, one
+// leaning away from every other turn, a stretch of three columns pushed alike, and the
+// spiral's own bending are left as they are. Rows, columns and directions drawn at run time.
+TEST(SheetMidSurfaceExtractor, BumpsTowardsATouchingTurnArePutBack)
+{
+  std::mt19937        random(vu::RunTimeSeed());
+  auto                radius = [](double theta) { return 12.0 + 6.0 * theta / (2.0 * Pi); };
+  std::vector<double> theta{ 0.0 };
+  while (theta.back() < 5.0 * Pi)
+  {
+    theta.push_back(theta.back() + 3.0 / radius(theta.back()));
+  }
+  const int      rows = 8;
+  const auto     columns = static_cast<int>(theta.size());
+  itk::SheetMesh mesh;
+  mesh.GridRows = rows;
+  mesh.GridColumns = columns;
+  for (int r = 0; r < rows; ++r)
+  {
+    for (int c = 0; c < columns; ++c)
+    {
+      mesh.Points.insert(mesh.Points.end(),
+                         { radius(theta[c]) * std::cos(theta[c]), radius(theta[c]) * std::sin(theta[c]), 1.0 * r });
+      mesh.GridIndex.insert(mesh.GridIndex.end(), { r, c });
+    }
+  }
+  const std::vector<double> truth = mesh.Points;
+  const double              thickness = 2.0;
+  EXPECT_EQ(itk::SheetMidSurfaceExtractor::SmoothTouchBumps(mesh, thickness), 0u);
+  EXPECT_EQ(mesh.Points, truth);
+
+  // Radial pushes (outwards for positive sizes) of column c and of its two neighbours.
+  auto push = [&](int r, int c, double peak, double side) {
+    for (int k = -1; k <= 1; ++k)
+    {
+      const size_t p = static_cast<size_t>(r * columns + c + k);
+      const double size = k == 0 ? peak : side;
+      mesh.Points[3 * p] += size * std::cos(theta[c + k]);
+      mesh.Points[3 * p + 1] += size * std::sin(theta[c + k]);
+    }
+  };
+  // One bump in each of rows 0 to 3, in the middle of the row, towards a turn inside or
+  // outside (the outer one where there is one, half the time): 1.3 to 1.8 thicknesses at
+  // c, a quarter to 0.4 of that at its sides.
+  std::uniform_real_distribution<double> peakSize(1.3 * thickness, 1.8 * thickness), sideShare(0.25, 0.4);
+  std::uniform_int_distribution<int>     middleTurn(columns / 3, 2 * columns / 3);
+  std::bernoulli_distribution            outwards(0.5);
+  std::vector<int>                       bumped;
+  for (int r = 0; r < 4; ++r)
+  {
+    bumped.push_back(middleTurn(random));
+    const bool   outerTurn = theta[static_cast<size_t>(bumped.back())] + 2.0 * Pi <= theta.back();
+    const double peak = (outerTurn && outwards(random) ? 1.0 : -1.0) * peakSize(random);
+    push(r, bumped.back(), peak, sideShare(random) * peak);
+  }
+  // Left alone: in row 4 a bump of 0.8 thickness; in row 5 one pushing the outermost turn
+  // outwards (no turn there); in row 6 a stretch of three columns pushed alike.
+  push(4, middleTurn(random), 0.8 * thickness, 0.25 * thickness);
+  push(5, columns - 8, 1.5 * thickness, 0.4 * thickness);
+  push(6, middleTurn(random), 1.5 * thickness, 1.5 * thickness);
+  const std::vector<double> pushed = mesh.Points;
+  EXPECT_EQ(itk::SheetMidSurfaceExtractor::SmoothTouchBumps(mesh, thickness), 12u);
+  double farthest = 0.0;
+  for (int r = 0; r < 4; ++r)
+  {
+    for (int k = -1; k <= 1; ++k)
+    {
+      const size_t p = static_cast<size_t>(r * columns + bumped[static_cast<size_t>(r)] + k);
+      farthest =
+        std::max(farthest, std::hypot(mesh.Points[3 * p] - truth[3 * p], mesh.Points[3 * p + 1] - truth[3 * p + 1]));
+      std::copy(pushed.begin() + 3 * p, pushed.begin() + 3 * p + 3, mesh.Points.begin() + 3 * p);
+    }
+  }
+  std::cout << "bumps put back within " << farthest << " voxel of the spiral" << std::endl;
+  EXPECT_LT(farthest, 0.1);
+  EXPECT_EQ(mesh.Points, pushed);
+}
+
 TEST(SheetMidSurfaceExtractor, OffSheetRunsNameAMeshTracedBetweenTurns)
 {
   // The spiral's mask as intensities (air 0, sheet 1): the mesh traced on it lies on the
