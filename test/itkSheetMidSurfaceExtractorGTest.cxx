@@ -434,30 +434,42 @@ TEST(SheetMidSurfaceExtractor, GridStepsNameAMeshThatJumpsATurn)
   EXPECT_GT(alongAxis, 0u);
 }
 
-TEST(SheetMidSurfaceExtractor, RowSpikesArePutBackButARowOnAnotherTurnIsNot)
+// A grid on the spiral r = 12 + 6 theta / (2 pi) (turn spacing 6), 8 rows one apart,
+// columns three voxels apart along 2.5 turns; Theta holds each column's angle.
+struct SpiralGrid
 {
-  // A grid on the spiral r = 12 + 6 theta / (2 pi) (turn spacing 6), 8 rows one apart,
-  // columns three voxels apart along 2.5 turns.
-  auto                radius = [](double theta) { return 12.0 + 6.0 * theta / (2.0 * Pi); };
-  std::vector<double> theta{ 0.0 };
-  while (theta.back() < 5.0 * Pi)
+  std::vector<double> Theta{ 0.0 };
+  itk::SheetMesh      Mesh;
+  int                 Columns = 0;
+
+  SpiralGrid()
   {
-    theta.push_back(theta.back() + 3.0 / radius(theta.back()));
-  }
-  const int      rows = 8;
-  const auto     columns = static_cast<int>(theta.size());
-  itk::SheetMesh mesh;
-  mesh.GridRows = rows;
-  mesh.GridColumns = columns;
-  for (int r = 0; r < rows; ++r)
-  {
-    for (int c = 0; c < columns; ++c)
+    auto radius = [](double theta) { return 12.0 + 6.0 * theta / (2.0 * Pi); };
+    while (Theta.back() < 5.0 * Pi)
     {
-      mesh.Points.insert(mesh.Points.end(),
-                         { radius(theta[c]) * std::cos(theta[c]), radius(theta[c]) * std::sin(theta[c]), 1.0 * r });
-      mesh.GridIndex.insert(mesh.GridIndex.end(), { r, c });
+      Theta.push_back(Theta.back() + 3.0 / radius(Theta.back()));
+    }
+    Columns = static_cast<int>(Theta.size());
+    Mesh.GridRows = 8;
+    Mesh.GridColumns = Columns;
+    for (int r = 0; r < Mesh.GridRows; ++r)
+    {
+      for (int c = 0; c < Columns; ++c)
+      {
+        Mesh.Points.insert(Mesh.Points.end(),
+                           { radius(Theta[c]) * std::cos(Theta[c]), radius(Theta[c]) * std::sin(Theta[c]), 1.0 * r });
+        Mesh.GridIndex.insert(Mesh.GridIndex.end(), { r, c });
+      }
     }
   }
+};
+
+TEST(SheetMidSurfaceExtractor, RowSpikesArePutBackButARowOnAnotherTurnIsNot)
+{
+  SpiralGrid                spiral;
+  itk::SheetMesh &          mesh = spiral.Mesh;
+  const std::vector<double> theta = spiral.Theta;
+  const int                 columns = spiral.Columns;
   const std::vector<double> truth = mesh.Points;
   EXPECT_EQ(itk::SheetMidSurfaceExtractor::SmoothRowSpikes(mesh, 0.7 * 6.0), 0u);
   EXPECT_EQ(mesh.Points, truth);
@@ -504,27 +516,11 @@ TEST(SheetMidSurfaceExtractor, RowSpikesArePutBackButARowOnAnotherTurnIsNot)
 // spiral's own bending are left as they are. Rows, columns and directions drawn at run time.
 TEST(SheetMidSurfaceExtractor, BumpsTowardsATouchingTurnArePutBack)
 {
-  std::mt19937        random(vu::RunTimeSeed());
-  auto                radius = [](double theta) { return 12.0 + 6.0 * theta / (2.0 * Pi); };
-  std::vector<double> theta{ 0.0 };
-  while (theta.back() < 5.0 * Pi)
-  {
-    theta.push_back(theta.back() + 3.0 / radius(theta.back()));
-  }
-  const int      rows = 8;
-  const auto     columns = static_cast<int>(theta.size());
-  itk::SheetMesh mesh;
-  mesh.GridRows = rows;
-  mesh.GridColumns = columns;
-  for (int r = 0; r < rows; ++r)
-  {
-    for (int c = 0; c < columns; ++c)
-    {
-      mesh.Points.insert(mesh.Points.end(),
-                         { radius(theta[c]) * std::cos(theta[c]), radius(theta[c]) * std::sin(theta[c]), 1.0 * r });
-      mesh.GridIndex.insert(mesh.GridIndex.end(), { r, c });
-    }
-  }
+  std::mt19937              random(vu::RunTimeSeed());
+  SpiralGrid                spiral;
+  itk::SheetMesh &          mesh = spiral.Mesh;
+  const std::vector<double> theta = spiral.Theta;
+  const int                 columns = spiral.Columns;
   const std::vector<double> truth = mesh.Points;
   const double              thickness = 2.0;
   EXPECT_EQ(itk::SheetMidSurfaceExtractor::SmoothTouchBumps(mesh, thickness), 0u);
