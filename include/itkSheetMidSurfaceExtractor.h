@@ -95,6 +95,11 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
   double                 SpacingAlongAxis{ 0.0 };
   /** Estimated from the mask: area of a slice's material over its traced length. */
   double SheetThickness{ 0.0 };
+  /** The share of the mask's material the traces follow: in a dozen well-traced slices,
+   * the mask's extent across the trace (median over its points) times the traced length
+   * over the slice's material area; the median over those slices (at most 1). Below 0.9,
+   * the mesh leaves out turns, pages or pieces the mask holds, and a warning says so. */
+  double TracedShare{ 1.0 };
   /** Smallest radius of curvature of the traced curves (5th percentile). */
   double MinimumCurvatureRadius{ 0.0 };
   /** Median traced length of the sheet in a slice (mm). */

@@ -41,6 +41,11 @@ using RollTracing::Median;
 
 // Slices at most by which the mesh reaches past the last well-traced slice along the axis.
 constexpr long EdgeSlices = 8;
+
+// The mask's extent across a trace is measured up to this many voxels either side; a
+// share of the material followed below TracedShareWarning is warned of.
+constexpr double TracedExtentVoxels = 20.0;
+constexpr double TracedShareWarning = 0.9;
 } // namespace
 
 SheetMesh
@@ -409,7 +414,7 @@ void
 Extraction::MeasureSheet()
 {
   // Thickness and the smallest radius of curvature, from the well-traced slices.
-  std::vector<double> thicknesses, radii;
+  std::vector<double> thicknesses, radii, tracedShares;
   size_t              goodCount = 0;
   for (long k = firstGood; k <= lastGood; ++k)
   {
@@ -438,8 +443,47 @@ Extraction::MeasureSheet()
     {
       radii.push_back(Circumradius(&even[2 * (i - offset)], &even[2 * i], &even[2 * (i + offset)]));
     }
+    // The mask's extent across the trace (median over its points) times the trace's length,
+    // over the slice's material: the share of the material the trace follows.
+    const SliceSampler  sampler(volume, k);
+    const double        march = 0.25 * voxel;
+    std::vector<double> extents;
+    for (size_t i = 1; i + 1 < points; i += 4)
+    {
+      const double tx = even[2 * (i + 1)] - even[2 * (i - 1)], ty = even[2 * (i + 1) + 1] - even[2 * (i - 1) + 1];
+      const double norm = std::hypot(tx, ty);
+      const double x = even[2 * i], y = even[2 * i + 1];
+      if (!(norm > 0.0) || sampler.Mask(x, y) < 0.5)
+      {
+        continue;
+      }
+      double extent = march;
+      for (const double side : { -1.0, 1.0 })
+      {
+        const double nx0 = -side * ty / norm, ny0 = side * tx / norm;
+        for (double d = march; d <= TracedExtentVoxels * voxel && sampler.Mask(x + d * nx0, y + d * ny0) >= 0.5;
+             d += march)
+        {
+          extent += march;
+        }
+      }
+      extents.push_back(extent);
+    }
+    if (!extents.empty() && area[k] > 0.0)
+    {
+      tracedShares.push_back(std::min(1.0, Median(extents) * lengths[k] / area[k]));
+    }
   }
   m_Report.SheetThickness = Median(thicknesses);
+  m_Report.TracedShare = tracedShares.empty() ? 1.0 : Median(tracedShares);
+  if (m_Report.TracedShare < TracedShareWarning)
+  {
+    std::ostringstream text;
+    text << "about " << std::lround(100.0 * (1.0 - m_Report.TracedShare))
+         << " % of the material in the mask's slices lies away from the traced sheet (not across it): turns, pages "
+            "or pieces of the sheet may be missing from the mesh";
+    m_Report.Warnings.push_back(text.str());
+  }
   m_Report.SheetLength = referenceLength;
   m_Report.MinimumCurvatureRadius = radii.empty() ? referenceLength : Percentile(radii, 0.05);
   if (!std::isfinite(m_Report.MinimumCurvatureRadius))

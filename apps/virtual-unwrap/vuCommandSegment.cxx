@@ -197,6 +197,7 @@ RunSegment(const SegmentOptions & options)
   json["grid"] = { { "rows", mesh.GridRows }, { "columns", mesh.GridColumns } };
   json["mesh_spacing_mm"] = { { "along_sheet", report.SpacingAlongSheet }, { "along_axis", report.SpacingAlongAxis } };
   json["sheet_thickness_mm"] = report.SheetThickness;
+  json["traced_share"] = report.TracedShare;
   json["sheet_length_mm"] = report.SheetLength;
   json["minimum_curvature_radius_mm"] = report.MinimumCurvatureRadius;
   json["interpolated_slices"] = report.InterpolatedSlices;

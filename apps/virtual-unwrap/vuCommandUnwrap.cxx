@@ -952,6 +952,7 @@ UnwrapSheet(const SheetContext & context,
                      { "triangles", surface.GetNumberOfTriangles() },
                      { "grid", { surface.GridRows, surface.GridColumns } },
                      { "sheet_thickness_mm", meshReport.SheetThickness },
+                     { "traced_share", meshReport.TracedShare },
                      { "sheet_length_mm", meshReport.SheetLength },
                      { "minimum_curvature_radius_mm", meshReport.MinimumCurvatureRadius },
                      { "trace", TraceJson(meshReport) } };
