@@ -63,9 +63,10 @@ namespace itk {
  *   few lines of writing on a long sheet fill the top 4 % of their blocks but not of the
  *   whole texture, and a compact blot (a bulge's flank, a blanked patch's rim) fills the
  *   top percent of its block but not the top 4 %. Pixels within 6 strokeSigma of the
- *   sheet's border, where the band rings, are not scored. With `leaveOut` (a texture of the same size), the pixels where
- *   it is not finite are left out of the score (not of the filtering): where the sheet
- *   is off the surface the stack was sampled about, or another sheet touches it.
+ *   sheet's border, where the band rings, are not scored. With `leaveOut` (a texture of
+ *   the same size), the pixels where it is not finite are left out of the score (not of
+ *   the filtering): where the sheet is off the surface the stack was sampled about, or
+ *   another sheet touches it.
  * - Quantiles(): the values of the finite pixels at the given ranks q (0..1; the value
  *   of rank round(q (n - 1)) of the n finite pixels sorted), exactly, by sampled selection
  *   in a few passes without copying the texture (a display window, a noise level). An
@@ -89,8 +90,9 @@ namespace itk {
  *   components of the first kind, or while they are faint letters run together along a
  *   line (the lines run along the texture's longer side: 0.5 to 1.5 times those
  *   components' height across it, at most 4 times it along it). A letter's faint parts
- *   are kept with its strong ones; a faint letter that nowhere reaches 4.5 spreads but outweighs every blob of the noise is
- *   kept whole (the noise makes blobs on both sides alike, the ink on one side only, so
+ *   are kept with its strong ones; a faint letter that nowhere reaches 4.5 spreads but
+ *   outweighs every blob of the noise is kept whole (the noise makes blobs on both sides
+ *   alike, the ink on one side only, so
  *   the other side measures the noise's largest blob in this very texture: high over a
  *   long sheet, low over a small page), and a faint band across a sheet, larger than any
  *   letter, is not. The background's noise, which passes one spread in a sixth of
