@@ -128,9 +128,9 @@ std::vector<SheetMidSurfaceReport::GridStep>
 SheetMidSurfaceExtractor::FindGridSteps(const SheetMesh & mesh, double limit)
 {
   std::vector<SheetMidSurfaceReport::GridStep> steps;
-  const auto                                   rows = static_cast<size_t>(std::max(0, mesh.GridRows));
-  const auto                                   columns = static_cast<size_t>(std::max(0, mesh.GridColumns));
-  if (!mesh.IsGridStructured() || rows * columns != mesh.GetNumberOfPoints() || columns < 3 || !(limit > 0.0))
+  const auto                                   shape = GridShape(mesh);
+  const size_t                                 rows = shape.first, columns = static_cast<size_t>(shape.second);
+  if (columns < 3 || !(limit > 0.0))
   {
     return steps;
   }
@@ -300,12 +300,12 @@ SheetMidSurfaceExtractor::FindOffSheetRuns(const SheetMesh &       mesh,
                                            size_t                  minimumRun)
 {
   std::vector<SheetMidSurfaceReport::OffSheetRun> runs;
-  const auto                                      rows = static_cast<size_t>(std::max(0, mesh.GridRows));
-  const auto                                      columns = static_cast<size_t>(std::max(0, mesh.GridColumns));
+  const auto                                      shape = GridShape(mesh);
+  const size_t                                    rows = shape.first, columns = static_cast<size_t>(shape.second);
   const long nx = static_cast<long>(volume.Size[0]), ny = static_cast<long>(volume.Size[1]),
              nz = static_cast<long>(volume.Size[2]);
-  if (volume.Intensity == nullptr || !mesh.IsGridStructured() || rows * columns != mesh.GetNumberOfPoints() ||
-      rows < 3 || columns < 2 * EndColumns + minimumRun || !(sheetLevel > airLevel) || nx < 4 || ny < 4 || nz < 4)
+  if (volume.Intensity == nullptr || rows < 3 || columns < 2 * EndColumns + minimumRun || !(sheetLevel > airLevel) ||
+      nx < 4 || ny < 4 || nz < 4)
   {
     return runs;
   }

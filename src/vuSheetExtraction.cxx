@@ -450,8 +450,9 @@ Extraction::MeasureSheet()
     std::vector<double> extents;
     for (size_t i = 1; i + 1 < points; i += 4)
     {
-      const double tx = even[2 * (i + 1)] - even[2 * (i - 1)], ty = even[2 * (i + 1) + 1] - even[2 * (i - 1) + 1];
-      const double norm = std::hypot(tx, ty);
+      double       chord[2];
+      const double norm = NeighbourChord(even, i, chord);
+      const double tx = chord[0], ty = chord[1];
       const double x = even[2 * i], y = even[2 * i + 1];
       if (!(norm > 0.0) || sampler.Mask(x, y) < 0.5)
       {
