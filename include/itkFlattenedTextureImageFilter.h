@@ -53,16 +53,23 @@ namespace itk {
  *
  * Each output pixel finds its flat triangle by rasterisation (ComputeTexturePixelMap:
  * each triangle visits the pixel centres of its bounding box with a barycentric inside
- * test), maps by the same barycentric coordinates to a 3D point and an interpolated
- * area-weighted vertex normal, and samples the volume there (LayeredVolumeSampler). The
- * pixel map, the "where to sample", is kept and reused while the meshes, PixelSize and
- * Margin stay the same, so changing the layers, focus or filter only resamples;
+ * test), maps by the same barycentric coordinates to a 3D point (moved from the flat
+ * triangle onto the curved sheet its corners' normals describe: Phong tessellation) and
+ * an interpolated area-weighted vertex normal, and samples the volume there
+ * (LayeredVolumeSampler). The
+ * pixel map, the "where to sample", is kept and reused while the meshes, PixelSize,
+ * Margin and CurvedSurface stay the same, so changing the layers, focus or filter only resamples;
  * GetPixelMap() exposes it.
  *
  * Parameters (defaults; ranges):
  * - PixelSize: output pixel side, physical units (1.0; > 0), independent of the mesh
  *   resolution;
  * - Margin: border added around the flat mesh's bounding box, physical units (0; >= 0);
+ * - CurvedSurface (false): place each pixel's point on the curved sheet the surface's
+ *   vertices and normals describe instead of on its flat triangle (ComputeTexturePixelMap):
+ *   a texture read from a thin slab at a fixed depth sees the triangles' chords, which
+ *   lie inside a curved sheet by up to their sagitta, as stripes along the mesh's
+ *   columns;
  * - NumberOfLayers (1; >= 1), LayerSpacing (1.0; > 0, physical units), Focus: offset of
  *   the central layer along the normal (0.0; any, physical units), LayerSide
  *   (Both; Both, Positive, Negative), LayerFilter (Mean; Mean, GaussianMean, Max, Min,
@@ -135,6 +142,9 @@ public:
   itkGetConstMacro(PixelSize, double);
   itkSetMacro(Margin, double);
   itkGetConstMacro(Margin, double);
+  itkSetMacro(CurvedSurface, bool);
+  itkGetConstMacro(CurvedSurface, bool);
+  itkBooleanMacro(CurvedSurface);
   itkSetMacro(NumberOfLayers, unsigned int);
   itkGetConstMacro(NumberOfLayers, unsigned int);
   itkSetMacro(LayerSpacing, double);
@@ -187,6 +197,7 @@ private:
 
   double                             m_PixelSize{ 1.0 };
   double                             m_Margin{ 0.0 };
+  bool                               m_CurvedSurface{ false };
   unsigned int                       m_NumberOfLayers{ 1 };
   double                             m_LayerSpacing{ 1.0 };
   double                             m_Focus{ 0.0 };
@@ -207,6 +218,7 @@ private:
   const MeshType * m_PixelMapSurface{ nullptr };
   const MeshType * m_PixelMapFlat{ nullptr };
   double           m_PixelMapMargin{ -1.0 };
+  bool             m_PixelMapCurved{ false };
 };
 } // end namespace itk
 

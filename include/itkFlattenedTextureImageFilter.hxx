@@ -187,18 +187,26 @@ FlattenedTextureImageFilter<TImage, TOutputImage, TMesh>::GenerateData()
   const bool         mapIsCurrent = m_PixelMapSurface == surfaceMesh && m_PixelMapFlat == flatMesh &&
                             m_PixelMapSurfaceTime == surfaceMesh->GetMTime() &&
                             m_PixelMapFlatTime == flatMesh->GetMTime() && m_PixelMap.PixelSize == m_PixelSize &&
-                            m_PixelMapMargin == m_Margin && !m_PixelMap.Triangle.empty();
+                            m_PixelMapMargin == m_Margin && m_PixelMapCurved == m_CurvedSurface &&
+                            !m_PixelMap.Triangle.empty();
   constexpr float mapShare = 0.3f;
   if (!mapIsCurrent)
   {
     m_PixelMapSurface = nullptr;
-    m_PixelMap = ComputeTexturePixelMap(
-      MeshToSheetMesh(surfaceMesh), MeshToSheetMesh(flatMesh), m_PixelSize, m_Margin, this, 0.0f, mapShare);
+    m_PixelMap = ComputeTexturePixelMap(MeshToSheetMesh(surfaceMesh),
+                                        MeshToSheetMesh(flatMesh),
+                                        m_PixelSize,
+                                        m_Margin,
+                                        this,
+                                        0.0f,
+                                        mapShare,
+                                        m_CurvedSurface);
     m_PixelMapSurface = surfaceMesh;
     m_PixelMapFlat = flatMesh;
     m_PixelMapSurfaceTime = surfaceMesh->GetMTime();
     m_PixelMapFlatTime = flatMesh->GetMTime();
     m_PixelMapMargin = m_Margin;
+    m_PixelMapCurved = m_CurvedSurface;
   }
   m_NumberOfSheetPixels = m_PixelMap.GetNumberOfSheetPixels();
   m_NumberOfDegenerateTriangles = m_PixelMap.NumberOfDegenerateTriangles;
@@ -306,6 +314,7 @@ FlattenedTextureImageFilter<TImage, TOutputImage, TMesh>::PrintSelf(std::ostream
   Superclass::PrintSelf(os, indent);
   os << indent << "PixelSize: " << m_PixelSize << std::endl;
   os << indent << "Margin: " << m_Margin << std::endl;
+  os << indent << "CurvedSurface: " << m_CurvedSurface << std::endl;
   os << indent << "NumberOfLayers: " << m_NumberOfLayers << std::endl;
   os << indent << "LayerSpacing: " << m_LayerSpacing << std::endl;
   os << indent << "Focus: " << m_Focus << std::endl;

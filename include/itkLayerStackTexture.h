@@ -118,6 +118,23 @@ namespace itk {
  *   carries, for Deconvolve(): the scanner's Gaussian PSF of full width at half maximum
  *   psfFWHM combined with the partial volume of voxels of size voxelSize,
  *   sqrt((psfFWHM / 2.3548)^2 + voxelSize^2 / 12) (both >= 0, physical units).
+ * - RegisterToSheet(): the stack resampled along its depth so that the sheet lies at the
+ *   same layers in every pixel. A mesh is never exactly on the sheet: its flat triangles
+ *   cut inside a curved sheet between their corners, a bulge it does not follow leaves it
+ *   off, and across a sheet's faces the scan changes steeply with depth, so a layer at a
+ *   fixed depth from the mesh shows these depth errors as stripes and blotches as strong
+ *   as the ink. In each pixel the sheet's centre is the centroid, over the layers, of the
+ *   stack's excess over the midpoint between air (the darkest layer's median) and sheet
+ *   (the middle layer's median), the stack first smoothed across the texture with a
+ *   Gaussian of `sigma` (physical units: wider than a stroke, so the ink, dense matter
+ *   near one face, hardly moves it); the centres are smoothed with a quarter of that and
+ *   each pixel's layers are read again, by linear interpolation along the depth (the end
+ *   layers repeated beyond the stack), shifted by its centre's offset from the median
+ *   centre. A stack of fewer than three layers, or without a sheet brighter than the air,
+ *   is returned as a copy; NaN stays NaN, and a pixel without material keeps its layers.
+ *   With `shift`, it receives each pixel's shift along the depth (the stack's third
+ *   spacing times the layers; NaN where nothing was shifted): a map of where, and how
+ *   far, the mesh lies off the sheet.
  * - Smooth(): Gaussian of standard deviation sigma (physical units, 0 returns a copy) by
  *   normalised convolution: NaN pixels neither contribute nor change.
  * - Median(): median of the finite pixels in the square of half-side `radius` (physical
@@ -178,6 +195,9 @@ public:
 
   static double
   ScanBlurSigma(double psfFWHM, double voxelSize);
+
+  static LayerStackType::Pointer
+  RegisterToSheet(const LayerStackType * stack, double sigma, TextureType::Pointer * shift = nullptr);
 
   static TextureType::Pointer
   Smooth(const TextureType * texture, double sigma);

@@ -78,6 +78,11 @@ struct ReadableTextureSelection
    * mid-surface (the middle layer holds air: a bulge the mesh does not follow; an
    * outermost layer holds material: another sheet touching this one) or near it. */
   size_t PixelsLeftOut{ 0 };
+  /** Focal slabs: the stack is registered to the sheet first
+   * (LayerStackTexture::RegisterToSheet); the median and 95th percentile of the shifts'
+   * size (physical units): how far the mesh lies off the sheet. */
+  double SheetShiftMedian{ 0.0 };
+  double SheetShiftP95{ 0.0 };
   double MedianRadius{ 0.0 };
   double SmoothSigma{ 0.0 };
   double CoreWidth{ 0.0 };

@@ -121,6 +121,11 @@ ReadableTextureImageFilter<TImage, TOutputImage, TMesh>::ConfigureTextureFilter(
   m_TextureFilter->SetVolume(volume);
   m_TextureFilter->SetPixelSize(m_AppliedPixelSize);
   m_TextureFilter->SetMargin(m_Margin >= 0.0 ? m_Margin : 2.0 * m_AppliedPixelSize);
+  // The focal slabs of a noisy scan read a layer a voxel thick at a fixed depth, where
+  // the triangles' chords would show as stripes: their points are placed on the curved
+  // sheet. The other textures take a layer stack's extreme over a side or the whole
+  // sheet, which such depth errors hardly change, and keep the triangles' points.
+  m_TextureFilter->SetCurvedSurface(m_AutomaticSide && m_DenoisingSigma > 0.0);
   m_TextureFilter->SetNumberOfLayers(m_AppliedNumberOfLayers);
   m_TextureFilter->SetLayerSpacing(m_AppliedLayerSpacing);
   m_TextureFilter->SetFocus(m_Focus);

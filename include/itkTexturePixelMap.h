@@ -114,7 +114,12 @@ ComputeTextureGrid(const SheetMesh & flat, double pixelSize, double margin);
  * each flat triangle visits the pixel centres in its bounding box, keeps those inside it
  * (barycentric test, shared edges covered), and maps them by the same barycentric
  * coordinates to a point of the 3D surface and to the normalised interpolation of the
- * surface's area-weighted vertex normals.
+ * surface's area-weighted vertex normals. With `curved`, the point is placed on the
+ * curved sheet the vertices and their normals describe rather than on the flat triangle
+ * (Phong tessellation, Boubekeur and Alexa 2008, shape factor 1/2: the barycentric blend
+ * of the point's projections onto the corners' tangent planes, halfway from the
+ * triangle), which on a roll meshed with the automatic spacing lies inside the sheet by
+ * up to its sagitta; on a plane the two coincide.
  *
  * surface and flat must share topology (same point count, same triangles): otherwise,
  * or when either mesh is invalid (SheetMesh::Validate), throws itk::ExceptionObject.
@@ -128,7 +133,8 @@ ComputeTexturePixelMap(const SheetMesh & surface,
                        double            margin,
                        ProcessObject *   filter = nullptr,
                        float             progressStart = 0.0f,
-                       float             progressEnd = 1.0f);
+                       float             progressEnd = 1.0f,
+                       bool              curved = false);
 } // end namespace itk
 
 #endif

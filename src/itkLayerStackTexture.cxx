@@ -650,6 +650,111 @@ LayerStackTexture::Quantiles(const TextureType * texture, const std::vector<doub
   return { values.begin(), values.end() };
 }
 
+LayerStackTexture::LayerStackType::Pointer
+LayerStackTexture::RegisterToSheet(const LayerStackType * stack, double sigma, TextureType::Pointer * shift)
+{
+  if (stack == nullptr || stack->GetBufferedRegion() != stack->GetLargestPossibleRegion())
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::RegisterToSheet: no layer stack, or it is not fully buffered");
+  }
+  if (!(sigma >= 0.0) || !std::isfinite(sigma))
+  {
+    itkGenericExceptionMacro(<< "LayerStackTexture::RegisterToSheet: sigma must be finite and not negative, not "
+                             << sigma);
+  }
+  const auto          size = stack->GetBufferedRegion().GetSize();
+  const auto          layers = static_cast<unsigned int>(size[2]);
+  const SizeValueType plane = size[0] * size[1];
+  auto                result = LayerStackType::New();
+  result->CopyInformation(stack);
+  result->SetRegions(stack->GetBufferedRegion());
+  result->Allocate();
+  const float * in = stack->GetBufferPointer();
+  float *       out = result->GetBufferPointer();
+  std::copy(in, in + plane * layers, out);
+  if (shift != nullptr)
+  {
+    *shift = detail::NewLayerTexture(stack);
+    std::fill((*shift)->GetBufferPointer(), (*shift)->GetBufferPointer() + plane, NaN);
+  }
+  if (layers < 3)
+  {
+    return result;
+  }
+  // Air: the darkest layer's median; sheet: the middle layer's.
+  double air = std::numeric_limits<double>::infinity();
+  for (unsigned int k = 0; k < layers; ++k)
+  {
+    const std::vector<double> q = Quantiles(LayerWindow(stack, k, 1), { 0.5 });
+    air = q.empty() ? air : std::min(air, q.front());
+  }
+  const std::vector<double> middle = Quantiles(LayerWindow(stack, layers / 2, 1), { 0.5 });
+  if (middle.empty() || !std::isfinite(air) || !(middle.front() > air))
+  {
+    return result;
+  }
+  const auto level = static_cast<float>(0.5 * (air + middle.front()));
+  // The centroid of the excess over the level, layer by layer into two sums.
+  auto    centre = LayerWindow(stack, 0, 1), mass = LayerWindow(stack, 0, 1); // overwritten
+  float * moment = centre->GetBufferPointer();
+  float * total = mass->GetBufferPointer();
+  std::fill(moment, moment + plane, 0.0f);
+  std::fill(total, total + plane, 0.0f);
+  for (unsigned int k = 0; k < layers; ++k)
+  {
+    const auto    smooth = Smooth(LayerWindow(stack, k, 1), sigma);
+    const float * v = smooth->GetBufferPointer();
+    for (SizeValueType i = 0; i < plane; ++i)
+    {
+      const float excess = std::isfinite(v[i]) ? std::max(0.0f, v[i] - level) : 0.0f;
+      total[i] += excess;
+      moment[i] += excess * static_cast<float>(k);
+    }
+  }
+  for (SizeValueType i = 0; i < plane; ++i)
+  {
+    moment[i] = total[i] > 0.0f ? moment[i] / total[i] : NaN;
+  }
+  centre = Smooth(centre, 0.25 * sigma);
+  const std::vector<double> typical = Quantiles(centre, { 0.5 });
+  if (typical.empty())
+  {
+    return result;
+  }
+  const float * c = centre->GetBufferPointer();
+  const auto    last = static_cast<float>(layers - 1);
+  float *       shifted = shift != nullptr ? (*shift)->GetBufferPointer() : nullptr;
+  const auto    depthSpacing = static_cast<float>(stack->GetSpacing()[2]);
+  MultiThreaderBase::New()->ParallelizeArray(
+    0,
+    size[1],
+    [&](SizeValueType row) {
+      for (SizeValueType i = row * size[0]; i < (row + 1) * size[0]; ++i)
+      {
+        if (!std::isfinite(c[i]))
+        {
+          continue;
+        }
+        const auto offset = static_cast<float>(c[i] - typical.front());
+        if (shifted != nullptr)
+        {
+          shifted[i] = offset * depthSpacing;
+        }
+        for (unsigned int k = 0; k < layers; ++k)
+        {
+          const float at = std::clamp(static_cast<float>(k) + offset, 0.0f, last);
+          const auto  below = static_cast<unsigned int>(std::floor(at));
+          const auto  above = std::min(below + 1, layers - 1);
+          const float t = at - static_cast<float>(below);
+          const float a = in[below * plane + i], b = in[above * plane + i];
+          out[k * plane + i] = !std::isfinite(a) ? (t > 0.0f ? b : a) : !std::isfinite(b) ? a : a + t * (b - a);
+        }
+      }
+    },
+    nullptr);
+  return result;
+}
+
 LayerStackTexture::TextureType::Pointer
 LayerStackTexture::Smooth(const TextureType * texture, double sigma)
 {

@@ -47,6 +47,9 @@ constexpr double ForeignReach = 3.0;
 // More than this share of the pixels off the sheet is not a local defect (turns packed
 // tighter than the stack reaches, a mesh off the sheet everywhere): nothing is left out.
 constexpr double ForeignShareLimit = 0.25;
+// The focal slabs are read from the stack registered to the sheet, its centre found over
+// this many voxels across the texture (wider than a stroke of writing).
+constexpr double RegistrationSigma = 2.0;
 
 [[noreturn]] void
 Fail(const std::string & message)
@@ -190,13 +193,28 @@ SelectReadableTexture(const Image<float, 3> * stack, const ReadableTextureSettin
   selection.FocalSlabs = settings.AutomaticSide && settings.DenoisingSigma > 0.0;
   if (selection.FocalSlabs)
   {
-    const double strokeSigma = 0.5 * settings.Voxel;
-    const auto   own = OwnSheetPixels(stack, layers, settings.Voxel, selection.PixelsLeftOut);
+    // Each pixel's layers read again about the sheet as the stack shows it, where the mesh
+    // is off it (LayerStackTexture::RegisterToSheet).
+    const double         strokeSigma = 0.5 * settings.Voxel;
+    TextureType::Pointer shift;
+    const auto registered = LayerStackTexture::RegisterToSheet(stack, RegistrationSigma * settings.Voxel, &shift);
+    float *    shifts = shift->GetBufferPointer();
+    for (size_t i = 0; i < shift->GetBufferedRegion().GetNumberOfPixels(); ++i)
+    {
+      shifts[i] = std::abs(shifts[i]);
+    }
+    const std::vector<double> sizes = LayerStackTexture::Quantiles(shift, { 0.5, 0.95 });
+    if (sizes.size() == 2)
+    {
+      selection.SheetShiftMedian = sizes[0];
+      selection.SheetShiftP95 = sizes[1];
+    }
+    const auto own = OwnSheetPixels(registered, layers, settings.Voxel, selection.PixelsLeftOut);
     for (const unsigned int count : { 3u, 5u })
     {
       for (unsigned int first = 0; first + count <= layers; ++first)
       {
-        textures.push_back(denoise(LayerStackTexture::LayerWindow(stack, first, count)));
+        textures.push_back(denoise(LayerStackTexture::LayerWindow(registered, first, count)));
         selection.Candidates.push_back({ SideEnum::Both,
                                          false,
                                          LayerStackTexture::StrokeContrast(textures.back(), strokeSigma, own),

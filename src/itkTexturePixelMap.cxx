@@ -101,6 +101,10 @@ ComputeTextureGrid(const SheetMesh & flat, double pixelSize, double margin)
 }
 
 namespace {
+// Phong tessellation's shape factor: 1/2 reproduces a circle's arc between two points
+// from their tangents to second order (the chord's midpoint moved by the sagitta).
+constexpr double PhongShape = 0.5;
+
 // Rasterises flat triangle t into the rows bandFirst..bandLast of `map`: every pixel centre
 // inside it gets the barycentric 3D point and interpolated unit normal (ZeroNormal where
 // the normals cancel).
@@ -112,7 +116,8 @@ RasteriseTriangle(TexturePixelMap &           map,
                   uint32_t                    t,
                   SizeValueType               bandFirst,
                   SizeValueType               bandLast,
-                  double                      pixelSize)
+                  double                      pixelSize,
+                  double                      shape)
 {
   const SizeValueType columns = map.Size[0];
   const double        inverse = 1.0 / pixelSize;
@@ -191,9 +196,34 @@ RasteriseTriangle(TexturePixelMap &           map,
         }
         continue;
       }
+      // With a shape factor (curved), the point on the curved sheet, not on the
+      // triangle's chord: Phong tessellation (Boubekeur and Alexa 2008), the barycentric
+      // blend of the point's projections onto the corners' tangent planes, `shape` of the
+      // way from the flat triangle. With 1/2, on a cylinder or sphere this is exact to
+      // second order in the edge length, where the flat triangle lies inside the sheet by
+      // up to its sagitta (edge^2 / 8R); on a plane it is the barycentric point.
+      double point[3];
       for (int d = 0; d < 3; ++d)
       {
-        map.Positions[3 * pixel + d] = static_cast<float>(la * sa[d] + lb * sb[d] + lc * sc[d]);
+        point[d] = la * sa[d] + lb * sb[d] + lc * sc[d];
+      }
+      const double * corners[3] = { sa, sb, sc };
+      const double * cornerNormals[3] = { na, nb, nc };
+      const double   weights[3] = { la, lb, lc };
+      double         bent[3] = { point[0], point[1], point[2] };
+      for (int v = 0; v < 3; ++v)
+      {
+        const double * q = corners[v];
+        const double * m = cornerNormals[v];
+        const double   away = (point[0] - q[0]) * m[0] + (point[1] - q[1]) * m[1] + (point[2] - q[2]) * m[2];
+        for (int d = 0; d < 3; ++d)
+        {
+          bent[d] -= shape * weights[v] * away * m[d];
+        }
+      }
+      for (int d = 0; d < 3; ++d)
+      {
+        map.Positions[3 * pixel + d] = static_cast<float>(bent[d]);
         map.Normals[3 * pixel + d] = static_cast<float>(n[d] / length);
       }
       map.Triangle[pixel] = static_cast<int32_t>(t);
@@ -209,7 +239,8 @@ ComputeTexturePixelMap(const SheetMesh & surface,
                        double            margin,
                        ProcessObject *   filter,
                        float             progressStart,
-                       float             progressEnd)
+                       float             progressEnd,
+                       bool              curved)
 {
   surface.Validate("ComputeTexturePixelMap: surface mesh");
   flat.Validate("ComputeTexturePixelMap: flat mesh");
@@ -294,7 +325,7 @@ ComputeTexturePixelMap(const SheetMesh & surface,
       std::fill(map.Triangle.begin() + first, map.Triangle.begin() + end, -1);
       for (const uint32_t t : bandTriangles[band])
       {
-        RasteriseTriangle(map, surface, flat, normals, t, bandFirst, bandLast, pixelSize);
+        RasteriseTriangle(map, surface, flat, normals, t, bandFirst, bandLast, pixelSize, curved ? PhongShape : 0.0);
       }
     },
     progress ? progress->GetProcessObject() : nullptr);

@@ -931,3 +931,126 @@ TEST(LayerStackTexture, RankMeasuresAreThoseOfTheSortedFiniteValues)
   EXPECT_THROW(LST::Quantiles(MakeTexture(2, 2, 0.5, [](unsigned, unsigned) { return 1.0f; }), { 1.5 }),
                itk::ExceptionObject);
 }
+
+// A sheet whose depth in the stack wanders as a mesh's does (a slow drift, a bulge the mesh
+// misses), with ink in the outer third of one face and
+// noise, all drawn at run time: registered to the sheet, every pixel's layers hold the
+// sheet at the same depth, and the slab through the ink shows the ink far better.
+TEST(LayerStackTexture, RegisterToSheetUndoesTheMeshsDepthErrors)
+{
+  const unsigned                         seed = vu::RunTimeSeed();
+  std::mt19937                           random(seed);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const unsigned                         columns = 240, rows = 90, layers = 13;
+  const double                           pixel = 0.5, layerSpacing = 0.5;   // mm; voxels of 1 mm
+  const double                           thickness = 2.5 + uniform(random); // mm
+  // Wanderings wider than the registration's smoothing (narrower ones, such as a coarse
+  // mesh's chords, are taken out where the texture's points are placed on the curved sheet).
+  const double amplitude = 0.3 + 0.4 * uniform(random), period = 20.0 + 20.0 * uniform(random);
+  const double phase = 6.283 * uniform(random);
+  const double bulgeX = 30.0 + 60.0 * uniform(random), bulgeY = 10.0 + 25.0 * uniform(random);
+  const double bulgeHeight = (uniform(random) < 0.5 ? -1.0 : 1.0) * (0.6 + 0.4 * uniform(random));
+  const double inkSide = uniform(random) < 0.5 ? -1.0 : 1.0, noiseLevel = 0.12 + 0.08 * uniform(random);
+  // Depth of the sheet's centre from the mesh (mm) at pixel (x, y).
+  auto depth = [&](unsigned x, unsigned y) {
+    const double px = x * pixel, py = y * pixel;
+    const double r2 = ((px - bulgeX) * (px - bulgeX) + (py - bulgeY) * (py - bulgeY)) / 16.0;
+    return amplitude * std::sin(6.283 * px / period + phase) + bulgeHeight * std::exp(-0.5 * r2);
+  };
+  // Letters' strokes: bars 3 pixels wide every 9 pixels, in bands of 24 rows.
+  auto ink = [](unsigned x, unsigned y) { return (y % 40) >= 8 && (y % 40) < 32 && x % 9 < 3 ? 1.0 : 0.0; };
+  // Material along the depth u (mm from the sheet's centre): a blurred box, and the ink
+  // blurred in the outer third on its side.
+  auto box = [](double u, double from, double to) {
+    const double blur = 0.6 * std::sqrt(2.0);
+    return 0.5 * (std::erf((u - from) / blur) - std::erf((u - to) / blur));
+  };
+  std::normal_distribution<float> noise(0.0f, static_cast<float>(noiseLevel));
+  auto                            make = [&](bool withInk, bool withNoise) {
+    auto                stack = StackType::New();
+    StackType::SizeType size = { { columns, rows, layers } };
+    stack->SetRegions(size);
+    stack->SetSpacing(vu::Triple<StackType::SpacingType>(pixel, pixel, layerSpacing));
+    stack->Allocate();
+    for (unsigned k = 0; k < layers; ++k)
+    {
+      for (unsigned y = 0; y < rows; ++y)
+      {
+        for (unsigned x = 0; x < columns; ++x)
+        {
+          const double u = (k - 0.5 * (layers - 1)) * layerSpacing - depth(x, y);
+          double       value = box(u, -0.5 * thickness, 0.5 * thickness);
+          if (withInk)
+          {
+            const double face = inkSide * thickness / 3.0;
+            value += 0.8 * ink(x, y) * box(u, face - thickness / 6.0, face + thickness / 6.0);
+          }
+          stack->SetPixel({ { long(x), long(y), long(k) } },
+                          static_cast<float>(value) + (withNoise ? noise(random) : 0.0f));
+        }
+      }
+    }
+    return stack;
+  };
+  const auto sigma = 2.0; // mm: two voxels
+
+  // Without ink or noise: after registration each layer is nearly the same in every pixel.
+  const auto           plain = make(false, false);
+  TextureType::Pointer shift;
+  const auto           plainRegistered = LST::RegisterToSheet(plain, sigma, &shift);
+  // The shifts map the sheet's depth (less its median).
+  const auto wander = MakeTexture(columns, rows, pixel, [&](unsigned x, unsigned y) { return float(depth(x, y)); });
+  EXPECT_GT(Correlation(shift, wander), 0.9) << "seed " << seed;
+  auto spread = [&](const StackType * s, unsigned k) {
+    const auto          layer = LST::LayerWindow(s, k, 1);
+    std::vector<double> values(layer->GetBufferPointer(),
+                               layer->GetBufferPointer() + layer->GetBufferedRegion().GetNumberOfPixels());
+    double              mean = 0.0, square = 0.0;
+    for (double v : values)
+    {
+      mean += v;
+      square += v * v;
+    }
+    mean /= values.size();
+    return std::sqrt(std::max(0.0, square / values.size() - mean * mean));
+  };
+  const unsigned faceLayer = static_cast<unsigned>(std::lround(0.5 * (layers - 1) + thickness / 2.0 / layerSpacing));
+  EXPECT_LT(spread(plainRegistered, faceLayer), 0.35 * spread(plain, faceLayer)) << "seed " << seed;
+
+  // With ink and noise: the 3-layer slab centred on the ink's depth.
+  const auto inked = make(true, true);
+  const auto registered = LST::RegisterToSheet(inked, sigma);
+  const auto inkLayer =
+    static_cast<unsigned>(std::lround(0.5 * (layers - 1) + inkSide * thickness / 3.0 / layerSpacing)) - 1;
+  const auto   truth = MakeTexture(columns, rows, pixel, [&](unsigned x, unsigned y) { return float(ink(x, y)); });
+  const double before = Correlation(LST::Smooth(LST::LayerWindow(inked, inkLayer, 3), 0.5), truth);
+  const double after = Correlation(LST::Smooth(LST::LayerWindow(registered, inkLayer, 3), 0.5), truth);
+  EXPECT_GT(after, before + 0.1) << "seed " << seed << ": correlation with the ink " << before << " -> " << after;
+  EXPECT_GT(after, 0.6) << "seed " << seed;
+}
+
+TEST(LayerStackTexture, RegisterToSheetKeepsWhatItCannotRegister)
+{
+  // Two layers: a copy. No sheet brighter than the air: a copy. NaN stays NaN.
+  const auto two = MakeStack(20, 10, 2, [](unsigned x, unsigned, unsigned k) { return float(x + k); });
+  const auto same = LST::RegisterToSheet(two, 1.0);
+  EXPECT_TRUE(std::equal(two->GetBufferPointer(), two->GetBufferPointer() + 400, same->GetBufferPointer()));
+  const auto flat =
+    MakeStack(20, 10, 5, [](unsigned x, unsigned y, unsigned) { return (x + y) % 7 == 0 ? NaN : 1.0f; });
+  const auto kept = LST::RegisterToSheet(flat, 1.0);
+  for (size_t i = 0; i < 1000; ++i)
+  {
+    const float a = flat->GetBufferPointer()[i], b = kept->GetBufferPointer()[i];
+    EXPECT_TRUE(std::isnan(a) ? std::isnan(b) : a == b);
+  }
+  const auto sheet = MakeStack(20, 10, 7, [](unsigned x, unsigned y, unsigned k) {
+    return (x + y) % 7 == 0 ? NaN : (k >= 2 && k <= 4 ? 1.0f : 0.0f);
+  });
+  const auto registered = LST::RegisterToSheet(sheet, 1.0);
+  for (size_t i = 0; i < 1400; ++i)
+  {
+    EXPECT_EQ(std::isnan(sheet->GetBufferPointer()[i]), std::isnan(registered->GetBufferPointer()[i]));
+  }
+  EXPECT_THROW(LST::RegisterToSheet(sheet, -1.0), itk::ExceptionObject);
+  EXPECT_THROW(LST::RegisterToSheet(nullptr, 1.0), itk::ExceptionObject);
+}

@@ -103,3 +103,64 @@ TEST(TexturePixelMap, RejectsMeshesOfDifferentTopology)
   surface.Points.resize(9);
   EXPECT_THROW(itk::ComputeTexturePixelMap(surface, flat, 0.25, 0.0), itk::ExceptionObject);
 }
+
+// A half cylinder of radius R meshed with coarse columns (chords of 30 degrees, as coarse
+// as the automatic mesh spacing makes them on a roll's inner turn) and its development:
+// placed on the curved sheet, the texture's points lie near the cylinder itself, not on
+// the chords, which run inside it by up to R (1 - cos 15 degrees) = 0.034 R.
+TEST(TexturePixelMap, PlacesPixelsOnTheCurvedSheetNotOnItsChords)
+{
+  const double   radius = 10.0, length = 6.0;
+  const unsigned columns = 7, rows = 3; // 0 to 180 degrees in steps of 30
+  itk::SheetMesh flat, surface;
+  for (unsigned r = 0; r < rows; ++r)
+  {
+    for (unsigned c = 0; c < columns; ++c)
+    {
+      const double angle = M_PI * c / (columns - 1), z = length * r / (rows - 1);
+      surface.Points.insert(surface.Points.end(), { radius * std::cos(angle), radius * std::sin(angle), z });
+      flat.Points.insert(flat.Points.end(), { radius * angle, z, 0.0 });
+    }
+  }
+  for (unsigned r = 0; r + 1 < rows; ++r)
+  {
+    for (unsigned c = 0; c + 1 < columns; ++c)
+    {
+      const uint32_t a = r * columns + c, b = a + 1, d = a + columns, e = d + 1;
+      flat.Triangles.insert(flat.Triangles.end(), { a, b, e, a, e, d });
+    }
+  }
+  surface.Triangles = flat.Triangles;
+  // The largest distance of the pixels' points from the cylinder, over all of them and
+  // away from the two end columns, whose corner normals lean towards the missing side.
+  auto distances = [&](bool curved, double & worst, double & worstMiddle) {
+    const itk::TexturePixelMap map = itk::ComputeTexturePixelMap(surface, flat, 0.1, 0.0, nullptr, 0.0f, 1.0f, curved);
+    worst = worstMiddle = 0.0;
+    for (size_t pixel = 0; pixel < map.GetNumberOfPixels(); ++pixel)
+    {
+      if (map.Triangle[pixel] < 0)
+      {
+        continue;
+      }
+      const double x = map.Positions[3 * pixel], y = map.Positions[3 * pixel + 1];
+      const double off = std::abs(std::hypot(x, y) - radius);
+      worst = std::max(worst, off);
+      const double u = map.Origin[0] + (pixel % map.Size[0]) * map.PixelSize;
+      if (u > radius * M_PI / 6.0 && u < radius * 5.0 * M_PI / 6.0)
+      {
+        worstMiddle = std::max(worstMiddle, off);
+      }
+    }
+  };
+  const double sagitta = radius * (1.0 - std::cos(M_PI / 12.0));
+  double       worst, worstMiddle;
+  distances(false, worst, worstMiddle);
+  EXPECT_GT(worstMiddle, 0.95 * sagitta) << "on the chords";
+  distances(true, worst, worstMiddle);
+  // The corners' normals are area-weighted means of their triangles' (the diagonals make
+  // them lean a little along the columns), so the curve is not followed exactly: a fifth
+  // of the sagitta at most in the middle (the chords themselves reach the whole of it),
+  // two thirds at the end columns.
+  EXPECT_LT(worstMiddle, 0.25 * sagitta) << "largest distance from the cylinder " << worstMiddle;
+  EXPECT_LT(worst, 0.75 * sagitta) << "at the end columns " << worst;
+}

@@ -162,10 +162,13 @@ TextureParametersJson(const itk::ReadableTextureImageFilter<VolumeType, TextureT
            { "filter", chosen.Count > 0 ? std::string("mean") : options.Filter },
            { "filter_requested", options.Filter },
            { "focal_slab",
-             chosen.Count > 0 ? nlohmann::json{ { "layers", { chosen.First, chosen.First + chosen.Count - 1 } },
-                                                { "depth_mm", selection.Depth },
-                                                { "pixels_left_out_of_scores", selection.PixelsLeftOut } }
-                              : nlohmann::json(false) },
+             chosen.Count > 0
+               ? nlohmann::json{ { "layers", { chosen.First, chosen.First + chosen.Count - 1 } },
+                                 { "depth_mm", selection.Depth },
+                                 { "pixels_left_out_of_scores", selection.PixelsLeftOut },
+                                 { "sheet_shift_mm",
+                                   { { "median", selection.SheetShiftMedian }, { "p95", selection.SheetShiftP95 } } } }
+               : nlohmann::json(false) },
            { "subtract_core", chosen.SubtractCore },
            { "subtract_core_requested", options.SubtractCore },
            { "core_width_mm", selection.CoreWidth },
