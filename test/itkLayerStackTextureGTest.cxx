@@ -1054,3 +1054,51 @@ TEST(LayerStackTexture, RegisterToSheetKeepsWhatItCannotRegister)
   EXPECT_THROW(LST::RegisterToSheet(sheet, -1.0), itk::ExceptionObject);
   EXPECT_THROW(LST::RegisterToSheet(nullptr, 1.0), itk::ExceptionObject);
 }
+
+// A line of writing whose last letters are faint (no pixel at the ink's core level), on a
+// long sheet that somewhere far from the writing holds a heavy blob below the background
+// (the rarest extreme of the noise over a long sheet, within its reach: no pixel at the
+// core level), heavier than a faint letter: over the whole sheet that blob sets the bar,
+// and a faint letter's twin far from the writing is cleared; near the writing only the
+// noise's blobs there count, and the faint letters are kept. Noise drawn at run time.
+TEST(LayerStackTexture, ClearBackgroundKeepsFaintLettersNearTheWriting)
+{
+  const unsigned int seed = vu::RunTimeSeed();
+  SCOPED_TRACE("noise seed " + std::to_string(seed));
+  std::mt19937                    random(seed);
+  std::normal_distribution<float> noise(0.0f, 1.0f);
+  const unsigned                  columns = 6000, rows = 80;
+  const std::vector<float>        values = Draw(columns * rows, noise, random);
+  // Strong letters 8 by 36 pixels every 20 from x = 100 (40 of them), five faint ones
+  // continuing the line, a faint letter's twin and the dark blob far away.
+  auto letter = [](unsigned x, unsigned y, unsigned from, unsigned to) {
+    return y >= 22 && y < 58 && x >= from && x < to && (x - from) % 20 < 8;
+  };
+  auto                strong = [&](unsigned x, unsigned y) { return letter(x, y, 100, 900); };
+  auto                faint = [&](unsigned x, unsigned y) { return letter(x, y, 900, 1000); };
+  auto                twin = [&](unsigned x, unsigned y) { return letter(x, y, 4000, 4008); };
+  auto                blob = [](unsigned x, unsigned y) { return y >= 20 && y < 60 && x >= 5000 && x < 5012; };
+  const auto          texture = MakeTexture(columns, rows, 0.5, [&](unsigned x, unsigned y) {
+    const float v = values[y * columns + x];
+    if (strong(x, y))
+    {
+      return 19.0f + v;
+    }
+    // The faint ink's and the blob's noise are clipped within the core level: only their
+    // mass and place count.
+    if (faint(x, y) || twin(x, y))
+    {
+      return 12.0f + std::clamp(v, -1.0f, 2.0f);
+    }
+    return blob(x, y) ? 8.0f + std::clamp(v, -2.0f, 1.0f) : 10.0f + v;
+  });
+  const ClearedCounts c = CountCleared(texture, strong, faint, twin);
+  ASSERT_LT(c.FaintPeak, 4.5);
+  ASSERT_LT(c.BandPeak, 4.5);
+  // At least four of the five letters (a letter whose noise splits it into pieces lighter
+  // than a blob beside it can go; without the rule near the writing none is kept).
+  EXPECT_GT(static_cast<double>(c.FaintKept), 0.7 * static_cast<double>(c.FaintPixels))
+    << "faint letters near the writing kept: " << c.FaintKept << " of " << c.FaintPixels;
+  EXPECT_EQ(c.BandKept, 0u) << "the faint twin far from the writing is cleared";
+  EXPECT_LT(static_cast<double>(c.Speckle), 0.02 * static_cast<double>(c.Background));
+}
