@@ -89,13 +89,7 @@ namespace itk {
  *   the noise) while their box is at most 1.5 times the median height, and width, of the
  *   components of the first kind, or while they are faint letters run together along a
  *   line (the lines run along the texture's longer side: 0.5 to 1.5 times those
- *   components' height across it, at most 4 times it along it). Within one such height of
- *   the writing kept (components at least half as tall as those of the first kind), a
- *   component of a letter's size or a run of letters is also ink when its mass exceeds
- *   that of every component on the other side within the same reach of it: near the
- *   writing the noise's blobs are few, where over a long sheet the heaviest of all sets
- *   a bar that faint words at a line's end do not reach (repeated while the writing kept
- *   grows, at most 10 times). A letter's faint parts
+ *   components' height across it, at most 4 times it along it). A letter's faint parts
  *   are kept with its strong ones; a faint letter that nowhere reaches 4.5 spreads but
  *   outweighs every blob of the noise is kept whole (the noise makes blobs on both sides
  *   alike, the ink on one side only, so

@@ -184,13 +184,6 @@ constexpr double InkBoxOverCores = 1.5;
 // direction: where they join into words it is wider than tall.)
 constexpr double InkRunHeightShare = 0.5;
 constexpr double InkRunHeights = 4.0;
-// ... or, within this many letters' heights of the writing kept (writing comes in lines
-// and words), when its mass exceeds the heaviest noise blob's on the other side of the
-// background within the same reach of it: near a letter the noise's blobs are few and the
-// bar low, where over a whole long sheet it is set by the noise's rarest extremes. The
-// reach grows with the letters kept, at most InkNearPasses times.
-constexpr double InkNearHeights = 1.0;
-constexpr int    InkNearPasses = 10;
 
 // StrokeContrast's blocks: at least this many pixels long, scored when at least this share
 // of their pixels is on the sheet.
@@ -611,7 +604,7 @@ LayerStackTexture::ClearBackground(const TextureType * texture, bool inkIsBright
   }
   const auto           size = texture->GetBufferedRegion().GetSize();
   const unsigned       along = size[0] >= size[1] ? 0 : 1, across = 1 - along;
-  std::vector<uint8_t> keep(count, 0), letterLike(count, 0);
+  std::vector<uint8_t> keep(count, 0);
   for (size_t l = 1; l < count; ++l)
   {
     const bool letterSized =
@@ -619,76 +612,10 @@ LayerStackTexture::ClearBackground(const TextureType * texture, bool inkIsBright
     const bool letterRun = extent(l, across) >= InkRunHeightShare * coreExtent[across] &&
                            extent(l, across) <= InkBoxOverCores * coreExtent[across] &&
                            extent(l, along) <= InkRunHeights * coreExtent[across];
-    letterLike[l] = letterSized || letterRun ? 1 : 0;
-    keep[l] = bright.Peak[l] > InkCoreSpreads || (bright.Mass[l] > darkMass && letterLike[l] != 0) ? 1 : 0;
+    keep[l] = bright.Peak[l] > InkCoreSpreads || (bright.Mass[l] > darkMass && (letterSized || letterRun)) ? 1 : 0;
   }
   const uint32_t * labels = bright.Labels->GetBufferPointer();
-  // Near the writing kept (components at least half a letter tall: a speck of noise past
-  // the core level is not writing), within InkNearHeights letters' heights of its box, a
-  // component of a letter's size, or a run of letters, is ink too when it outweighs every
-  // noise blob of the other side within the same reach of itself.
-  const uint32_t *     darkLabels = dark.Labels->GetBufferPointer();
-  const auto           reach = static_cast<long>(std::ceil(InkNearHeights * coreExtent[across]));
-  const auto           columns = static_cast<long>(size[0]), rows = static_cast<long>(size[1]);
-  std::vector<uint8_t> near(n, 0), marked(count, 0);
-  const auto           grownBox = [&](size_t l, long box[4]) {
-    box[0] = std::max(0L, bright.Low[0][l] - reach);
-    box[1] = std::min(columns - 1, bright.High[0][l] + reach);
-    box[2] = std::max(0L, bright.Low[1][l] - reach);
-    box[3] = std::min(rows - 1, bright.High[1][l] + reach);
-  };
-  for (int pass = 0; pass < InkNearPasses; ++pass)
-  {
-    for (size_t l = 1; l < count; ++l)
-    {
-      if (keep[l] == 0 || marked[l] != 0 || extent(l, across) < InkRunHeightShare * coreExtent[across])
-      {
-        continue;
-      }
-      marked[l] = 1;
-      long box[4];
-      grownBox(l, box);
-      for (long y = box[2]; y <= box[3]; ++y)
-      {
-        std::fill(near.begin() + y * columns + box[0], near.begin() + y * columns + box[1] + 1, uint8_t{ 1 });
-      }
-    }
-    std::vector<uint8_t> touches(count, 0);
-    for (size_t k = 0; k < n; ++k)
-    {
-      touches[labels[k]] = near[k] != 0 ? 1 : touches[labels[k]];
-    }
-    bool grown = false;
-    for (size_t l = 1; l < count; ++l)
-    {
-      if (keep[l] != 0 || touches[l] == 0 || letterLike[l] == 0 || !(bright.Mass[l] > 0.0))
-      {
-        continue;
-      }
-      long box[4];
-      grownBox(l, box);
-      double localDarkMass = 0.0;
-      for (long y = box[2]; y <= box[3]; ++y)
-      {
-        for (long x = box[0]; x <= box[1]; ++x)
-        {
-          const uint32_t d = darkLabels[y * columns + x];
-          localDarkMass =
-            d != 0 && dark.Peak[d] <= InkCoreSpreads ? std::max(localDarkMass, dark.Mass[d]) : localDarkMass;
-        }
-      }
-      if (bright.Mass[l] > localDarkMass)
-      {
-        keep[l] = 1;
-        grown = true;
-      }
-    }
-    if (!grown)
-    {
-      break;
-    }
-  }
-  const auto background = static_cast<float>(median);
+  const auto       background = static_cast<float>(median);
   for (size_t k = 0; k < n; ++k)
   {
     out[k] = std::isfinite(in[k]) && keep[labels[k]] == 0 ? background : in[k];
