@@ -82,7 +82,12 @@ PlateThickness(const TImage * image, const ImageRegion<3> & region, TInside insi
  * others stay whole, so a sheet that noise or ink breaks into parts side by side, or a
  * fold whose panels meet at a crease on their edges, is not split. Every voxel of the
  * piece then goes to its nearest core (itk::DanielssonDistanceMapImageFilter's Voronoi
- * map): across a fused contact, the middle of the slab.
+ * map): across a fused contact, the middle of the slab. Where pages lie a voxel or so
+ * apart or fuse, a page's face (denser where inked) can lie nearer to the other page's core
+ * than to its own: a voxel that lies across its nearest core (along the core's normal, the
+ * Hessian's eigenvector across the sheet) further than half the sheet's thickness less half
+ * the core's, and a voxel and a half more, goes to the nearest core of another sheet within
+ * whose reach it lies.
  *
  * Pages fused into one piece make it thicker than a page, and the scale its thickness
  * sets coarser than a page's: where a part split off, or SheetThickness (mm: the scan's

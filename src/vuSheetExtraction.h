@@ -20,6 +20,7 @@
 
 #include "itkSheetMidSurfaceExtractor.h"
 #include "vuGeneralSliceTracer.h"
+#include "vuRollTracer.h"
 
 #include <vector>
 
@@ -62,6 +63,8 @@ struct Extraction
   MeasureLevels();
   void
   TraceSlices();
+  bool
+  RollOnItsSheet(const std::vector<RollTracing::SliceTrace> & slices) const;
   void
   SelectSlices();
   void
