@@ -406,15 +406,15 @@ FindCores(const PieceImage * piece, const std::vector<float> & plate, double med
   return cores;
 }
 
-// Every voxel of the piece labelled with its nearest core (1-based, in the order of `cores`).
-// `toCore` receives, when given, each voxel's offset to its nearest core voxel (index units)
-// and `seeds` the cores' labels.
+// Every voxel of the piece labelled with its nearest core (1-based, in the order of `cores`);
+// `toCore` receives each voxel's offset to its nearest core voxel (index units) and
+// `seedsOut` the cores' labels.
 void
 LabelByNearestCore(const PieceImage *             piece,
                    const std::vector<Core> &      cores,
                    uint16_t *                     out,
-                   Image<Offset<3>, 3>::Pointer * toCore = nullptr,
-                   LabelImage::Pointer *          seedsOut = nullptr)
+                   Image<Offset<3>, 3>::Pointer & toCore,
+                   LabelImage::Pointer &          seedsOut)
 {
   const SizeValueType n = piece->GetBufferedRegion().GetNumberOfPixels();
   const uint8_t *     in = piece->GetBufferPointer();
@@ -440,15 +440,9 @@ LabelByNearestCore(const PieceImage *             piece,
   {
     out[v] = in[v] != 0 ? static_cast<uint16_t>(voronoi[v]) : 0;
   }
-  if (toCore != nullptr)
-  {
-    *toCore = nearest->GetVectorDistanceMap();
-    (*toCore)->DisconnectPipeline();
-  }
-  if (seedsOut != nullptr)
-  {
-    *seedsOut = seeds;
-  }
+  toCore = nearest->GetVectorDistanceMap();
+  toCore->DisconnectPipeline();
+  seedsOut = seeds;
 }
 
 // Gives the voxels that lie on another sheet back to it. Where two pages lie a voxel or so
@@ -706,7 +700,7 @@ SplitTouchingSheets(const Image<float, 3> * values,
   double thinnest = sheetThickness > 0.0 ? sheetThickness : std::numeric_limits<double>::infinity();
   if (cores.size() >= 2)
   {
-    LabelByNearestCore(piece, cores, out, &toCore, &seeds);
+    LabelByNearestCore(piece, cores, out, toCore, seeds);
     for (size_t c = 1; c <= cores.size(); ++c)
     {
       const double t = PlateThickness(
@@ -724,7 +718,7 @@ SplitTouchingSheets(const Image<float, 3> * values,
       std::vector<uint16_t>        finerLabels(n, 0);
       Image<Offset<3>, 3>::Pointer finerToCore;
       LabelImage::Pointer          finerSeeds;
-      LabelByNearestCore(piece, more, finerLabels.data(), &finerToCore, &finerSeeds);
+      LabelByNearestCore(piece, more, finerLabels.data(), finerToCore, finerSeeds);
       if (SheetsLieApart(values, piece, more, finerLabels, thinnest / sigma))
       {
         cores = std::move(more);
