@@ -22,45 +22,80 @@
 #include "itkImage.h"
 
 #include <cmath>
+#include <vector>
 
 namespace itk {
 
-/** The thickness of the plate made by the voxels of `image` within `region` for which
- * `inside(value)` holds: twice their volume over the area of their faces to the other
- * voxels (a staircase overstates an oblique sheet's area, so this errs thin), in physical
- * units (a voxel's cube root of volume per voxel); 0 without such voxels. */
-template <typename TImage, typename TInside>
-double
-PlateThickness(const TImage * image, const ImageRegion<3> & region, TInside inside)
+/** The thickness of the plate made by the voxels of each class 1 .. `classes` of `image`
+ * within `region` (element k; `classOf(value)` gives a voxel's class, 0 for none): twice
+ * the class's volume over the area of its faces to the other voxels (a staircase overstates
+ * an oblique sheet's area, so this errs thin), in physical units (a voxel's cube root of
+ * volume per voxel); 0 for a class without voxels. One pass over the region. */
+template <typename TImage, typename TClassOf>
+std::vector<double>
+PlateThicknessOfClasses(const TImage * image, const ImageRegion<3> & region, size_t classes, TClassOf classOf)
 {
-  const auto    size = region.GetSize();
-  const auto    full = image->GetBufferedRegion().GetSize();
-  const auto    start = image->ComputeOffset(region.GetIndex());
-  const auto *  in = image->GetBufferPointer();
-  const auto &  spacing = image->GetSpacing();
-  SizeValueType voxels = 0, faces = 0;
+  const auto                 size = region.GetSize();
+  const auto                 full = image->GetBufferedRegion().GetSize();
+  const auto                 start = image->ComputeOffset(region.GetIndex());
+  const auto *               in = image->GetBufferPointer();
+  const auto &               spacing = image->GetSpacing();
+  std::vector<SizeValueType> voxels(classes + 1, 0), faces(classes + 1, 0);
+  const OffsetValueType      step[3] = { 1,
+                                         static_cast<OffsetValueType>(full[0]),
+                                         static_cast<OffsetValueType>(full[0] * full[1]) };
   for (SizeValueType z = 0; z < size[2]; ++z)
   {
     for (SizeValueType y = 0; y < size[1]; ++y)
     {
       for (SizeValueType x = 0; x < size[0]; ++x)
       {
-        const auto v = start + static_cast<OffsetValueType>((z * full[1] + y) * full[0] + x);
-        if (!inside(in[v]))
+        const auto   v = start + static_cast<OffsetValueType>((z * full[1] + y) * full[0] + x);
+        const size_t k = classOf(in[v]);
+        if (k == 0)
         {
           continue;
         }
-        ++voxels;
-        faces += (x == 0 || !inside(in[v - 1])) + (x + 1 == size[0] || !inside(in[v + 1]));
-        faces += (y == 0 || !inside(in[v - full[0]])) + (y + 1 == size[1] || !inside(in[v + full[0]]));
-        faces +=
-          (z == 0 || !inside(in[v - full[0] * full[1]])) + (z + 1 == size[2] || !inside(in[v + full[0] * full[1]]));
+        ++voxels[k];
+        const SizeValueType at[3] = { x, y, z };
+        for (unsigned d = 0; d < 3; ++d)
+        {
+          faces[k] +=
+            (at[d] == 0 || classOf(in[v - step[d]]) != k) + (at[d] + 1 == size[d] || classOf(in[v + step[d]]) != k);
+        }
       }
     }
   }
-  return faces > 0 ? 2.0 * std::cbrt(spacing[0] * spacing[1] * spacing[2]) * static_cast<double>(voxels) /
-                       static_cast<double>(faces)
-                   : 0.0;
+  std::vector<double> thickness(classes + 1, 0.0);
+  const double        voxel = std::cbrt(spacing[0] * spacing[1] * spacing[2]);
+  for (size_t k = 1; k <= classes; ++k)
+  {
+    thickness[k] = faces[k] > 0 ? 2.0 * voxel * static_cast<double>(voxels[k]) / static_cast<double>(faces[k]) : 0.0;
+  }
+  return thickness;
+}
+
+/** The thickness of the plate made by the voxels of `image` within `region` for which
+ * `inside(value)` holds (PlateThicknessOfClasses with one class). */
+template <typename TImage, typename TInside>
+double
+PlateThickness(const TImage * image, const ImageRegion<3> & region, TInside inside)
+{
+  return PlateThicknessOfClasses(
+    image, region, 1, [&inside](auto value) { return inside(value) ? size_t{ 1 } : size_t{ 0 }; })[1];
+}
+
+/** PlateThickness of each label 1 .. `labels` of a label image within `region` at once
+ * (element l; element 0 is not measured): one pass instead of one per label. Labels above
+ * `labels` count as other voxels. */
+template <typename TImage>
+std::vector<double>
+PlateThicknessPerLabel(const TImage * image, const ImageRegion<3> & region, size_t labels)
+{
+  return PlateThicknessOfClasses(image, region, labels, [labels](auto value) {
+    const auto l = static_cast<size_t>(value);
+    return l <= labels ? l : size_t{ 0 };
+  });
 }
 /** \brief Splits one piece of a sheet mask into the sheets that touch within it: pages
  * stuck together over part of their area, which thresholding joins into one piece.

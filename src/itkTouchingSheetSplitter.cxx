@@ -473,14 +473,14 @@ GiveStackedVoxelsTheirSheet(const PieceImage *                piece,
   const double        voxel = std::cbrt(spacing[0] * spacing[1] * spacing[2]);
   const double        margin = StackedMargin * voxel;
   // Each sheet's reach across its core: half its thickness less half its core's.
-  std::vector<double> reach(cores.size() + 1, 0.0);
-  double              thickest = 0.0;
+  std::vector<double>       reach(cores.size() + 1, 0.0);
+  double                    thickest = 0.0;
+  const std::vector<double> sheets = PlateThicknessPerLabel(labelImage, region, cores.size());
+  const std::vector<double> coreThickness = PlateThicknessPerLabel(seeds, region, cores.size());
   for (size_t c = 1; c <= cores.size(); ++c)
   {
-    const double sheet = PlateThickness(labelImage, region, [c](uint16_t l) { return l == c; });
-    const double core = PlateThickness(seeds, region, [c](uint32_t l) { return l == c; });
-    reach[c] = std::max(0.0, 0.5 * (sheet - core)) + margin;
-    thickest = std::max(thickest, sheet);
+    reach[c] = std::max(0.0, 0.5 * (sheets[c] - coreThickness[c])) + margin;
+    thickest = std::max(thickest, sheets[c]);
   }
   long reachOut[3];
   for (unsigned d = 0; d < 3; ++d)
@@ -701,11 +701,11 @@ SplitTouchingSheets(const Image<float, 3> * values,
   if (cores.size() >= 2)
   {
     LabelByNearestCore(piece, cores, out, toCore, seeds);
+    const std::vector<double> thickness =
+      PlateThicknessPerLabel(result.Labels.GetPointer(), piece->GetBufferedRegion(), cores.size());
     for (size_t c = 1; c <= cores.size(); ++c)
     {
-      const double t = PlateThickness(
-        result.Labels.GetPointer(), piece->GetBufferedRegion(), [c](uint16_t label) { return label == c; });
-      thinnest = t > 0.0 ? std::min(thinnest, t) : thinnest;
+      thinnest = thickness[c] > 0.0 ? std::min(thinnest, thickness[c]) : thinnest;
     }
   }
   const double finer = std::max(sigma, ScalePerThickness * thinnest);

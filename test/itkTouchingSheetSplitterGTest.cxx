@@ -18,6 +18,8 @@
 #include "itkTouchingSheetSplitter.h"
 
 #include "itkDiscreteGaussianImageFilter.h"
+#include "itkImageRegionConstIteratorWithIndex.h"
+#include "itkImageRegionIterator.h"
 #include "vuTestHelpers.h"
 
 #include "gtest/gtest.h"
@@ -224,4 +226,67 @@ TEST(TouchingSheetSplitter, OtherSheetsAreBlanked)
   EXPECT_LT(std::abs(mean), 0.05);
   EXPECT_GT(deviation, 0.6 / 8.0);
   EXPECT_LT(deviation, 1.4 / 8.0);
+}
+
+// The thickness of every label at once (twice its volume over the area of its faces to
+// other voxels or the region's border) against a count made face by face, on labels drawn
+// at run time, in the whole image and in a part of it; labels above the count asked for
+// count as other voxels, and PlateThickness gives one label's.
+TEST(TouchingSheetSplitter, PlateThicknessOfEveryLabelInOnePass)
+{
+  using LabelImage = itk::Image<uint16_t, 3>;
+  const unsigned      seed = vu::RunTimeSeed();
+  std::mt19937        random(seed);
+  auto                labels = LabelImage::New();
+  itk::ImageRegion<3> whole;
+  whole.SetSize({ { 23, 17, 11 } });
+  labels->SetRegions(whole);
+  const double spacing[3] = { 0.5, 0.5, 0.8 };
+  labels->SetSpacing(spacing);
+  labels->Allocate();
+  std::uniform_int_distribution<int> draw(0, 5);
+  // Slabs along y with a label each, their borders moved at random: plates of a few voxels.
+  for (itk::ImageRegionIterator<LabelImage> it(labels, whole); !it.IsAtEnd(); ++it)
+  {
+    const auto i = it.GetIndex();
+    it.Set(static_cast<uint16_t>(draw(random) == 0 ? draw(random) : (i[1] + draw(random) / 3) / 4));
+  }
+  itk::ImageRegion<3> part;
+  part.SetIndex({ { 2, 3, 1 } });
+  part.SetSize({ { 18, 12, 9 } });
+  const double voxel = std::cbrt(0.5 * 0.5 * 0.8);
+  for (const auto & region : { whole, part })
+  {
+    const std::vector<double> all = itk::PlateThicknessPerLabel(labels.GetPointer(), region, 3);
+    ASSERT_EQ(all.size(), 4u);
+    for (uint16_t l = 1; l <= 3; ++l)
+    {
+      double voxels = 0.0, faces = 0.0;
+      for (itk::ImageRegionConstIteratorWithIndex<LabelImage> it(labels, region); !it.IsAtEnd(); ++it)
+      {
+        if (it.Get() != l)
+        {
+          continue;
+        }
+        voxels += 1.0;
+        for (unsigned d = 0; d < 3; ++d)
+        {
+          for (int side : { -1, 1 })
+          {
+            auto next = it.GetIndex();
+            next[d] += side;
+            faces += !region.IsInside(next) || labels->GetPixel(next) != l ? 1.0 : 0.0;
+          }
+        }
+      }
+      ASSERT_GT(faces, 0.0) << "seed " << seed;
+      EXPECT_NEAR(all[l], 2.0 * voxel * voxels / faces, 1e-12) << "label " << l << ", seed " << seed;
+      EXPECT_EQ(itk::PlateThickness(labels.GetPointer(), region, [l](uint16_t v) { return v == l; }), all[l]);
+    }
+    // Asked for two labels, label 3's voxels are other voxels, as they were for 1 and 2.
+    const std::vector<double> two = itk::PlateThicknessPerLabel(labels.GetPointer(), region, 2);
+    ASSERT_EQ(two.size(), 3u);
+    EXPECT_EQ(two[1], all[1]);
+    EXPECT_EQ(two[2], all[2]);
+  }
 }
