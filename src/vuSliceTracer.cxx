@@ -258,17 +258,19 @@ Tracer::NearestCrossing(const std::vector<Crossing> & list,
   if (circling && crossing.Band() && !std::isfinite(bump) &&
       std::max(crossing.Width / m_Width, crossing.Mass / m_Mass) < 2.5)
   {
-    // A band of two sheets (not three) whose sheet nearest the prediction is the turn before:
-    // where two turns touch, the prediction (from a neighbouring slice's trace, or the turns
-    // before) can fall on the turn before, and the step would be refused and the prediction
-    // carried through, onto the turn before, in this slice and in every slice it guides. The
-    // band's other sheet, beyond the turn before on this turn's side of it, is this turn's.
-    // Pressed together, the two sheets' middles lie closer than Apart(), the test for a
-    // step onto the turn before, which cannot tell them apart: the band's own sheets are
-    // compared instead (only then: a wider band's sheets are told apart by that test).
+    // A band of two sheets (not three), one of them the turn before: where two turns touch,
+    // the prediction (from a neighbouring slice's trace, or the turns before) can fall on the
+    // turn before, and the step would be refused and the prediction carried through, onto
+    // the turn before, in this slice and in every slice it guides. The band's other sheet,
+    // beyond the turn before on this turn's side of it, is this turn's, whichever of the two
+    // the prediction lies nearer. Pressed together, the two sheets' middles lie closer than
+    // Apart(), the test for a step onto the turn before, which cannot tell them apart: the
+    // band's own sheets are compared instead (only then: a wider band's sheets are told
+    // apart by that test).
     const double other = side > 0.0 ? crossing.Outer : crossing.Inner;
+    const double onBelow = side > 0.0 ? crossing.Inner : crossing.Outer;
     const double separation = crossing.Outer - crossing.Inner;
-    if (side != 0.0 && other != sheet && (other - below) * side > 0.0 && std::abs(sheet - below) < 0.25 * separation &&
+    if (side != 0.0 && (other - below) * side > 0.0 && std::abs(onBelow - below) < 0.25 * separation &&
         separation < apart)
     {
       sheet = other;
