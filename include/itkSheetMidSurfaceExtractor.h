@@ -147,6 +147,9 @@ struct VirtualUnwrapping_EXPORT SheetMidSurfaceReport
    * or two points off it, SheetMidSurfaceExtractor::SmoothRowSpikes; bumps towards a
    * touching turn, SheetMidSurfaceExtractor::SmoothTouchBumps). */
   size_t RowSpikesSmoothed{ 0 };
+  /** Roll method: grid points put back on their column's curve along the axis before the
+   * checks (SheetMidSurfaceExtractor::SmoothColumnSpikes). */
+  size_t ColumnSpikesSmoothed{ 0 };
   /** Roll method, with intensities: runs of grid points along a row that lie in air (the
    * intensity the tracer reads below a quarter of the sheet's contrast above the air's
    * level), at least three points long: a mesh traced between two turns, or stepping from
@@ -340,6 +343,19 @@ public:
    * four columns at either end are left alone. */
   static size_t
   SmoothTouchBumps(SheetMesh & mesh, double limit);
+
+  /** Puts back on its column's curve along the axis each grid point that leaves the cubic
+   * through the points two and one rows before it and one and two rows after it by more than
+   * `limit` (mm, in the slice plane), where the rows either side each lie within half the
+   * limit of the cubic through their own neighbours (that point left out): one row whose
+   * window of slices held a trace on the neighbouring turn over part of the sheet, while
+   * the rows about it, and the sheet, run smoothly along the axis. The point is set to the
+   * cubic; the two rows at either end are left alone. Extract runs it on a roll's grid with
+   * 0.7 of the turn spacing, before SmoothRowSpikes (two neighbouring rows pushed alike by
+   * a turn spacing leave the row beside them half a turn spacing off its cubic). Returns
+   * the number of points moved. */
+  static size_t
+  SmoothColumnSpikes(SheetMesh & mesh, double limit);
 
   /** Runs of at least `minimumRun` grid points along a row (points in the view's frame,
    * mm) where the view's intensity, as a fraction of (sheetLevel - airLevel) above airLevel

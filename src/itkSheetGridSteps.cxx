@@ -62,10 +62,10 @@ ReportRuns(const std::vector<double> & residual, double limit, Report report)
   }
 }
 
-// The cubic (Lagrange, in the column index) through the points of `row` at the four
-// columns `x`, at column c.
+// The cubic (Lagrange, in the index) through the points at the four indices `x` of a line of
+// grid points `stride` values apart from `first` (a row: 3; a column: 3 x columns), at index c.
 void
-RowCubic(const double * row, const std::array<long, 4> & x, long c, double out[3])
+LineCubic(const double * first, long stride, const std::array<long, 4> & x, long c, double out[3])
 {
   out[0] = out[1] = out[2] = 0.0;
   for (int i = 0; i < 4; ++i)
@@ -77,9 +77,16 @@ RowCubic(const double * row, const std::array<long, 4> & x, long c, double out[3
     }
     for (int d = 0; d < 3; ++d)
     {
-      out[d] += weight * row[3 * x[i] + d];
+      out[d] += weight * first[stride * x[i] + d];
     }
   }
+}
+
+// The cubic through the points of `row` at the four columns `x`, at column c.
+void
+RowCubic(const double * row, const std::array<long, 4> & x, long c, double out[3])
+{
+  LineCubic(row, 3, x, c, out);
 }
 
 // Distance in the slice plane from grid point p to q.
@@ -230,6 +237,52 @@ SheetMidSurfaceExtractor::SmoothRowSpikes(SheetMesh & mesh, double limit)
           std::copy(fitted[c - a], fitted[c - a] + 3, row + 3 * c);
           ++moved;
         }
+      }
+    }
+  }
+  return moved;
+}
+
+size_t
+SheetMidSurfaceExtractor::SmoothColumnSpikes(SheetMesh & mesh, double limit)
+{
+  const auto [rows, columns] = GridShape(mesh);
+  const auto count = static_cast<long>(rows);
+  if (columns < 1 || count < 6 || !(limit > 0.0))
+  {
+    return 0;
+  }
+  const long stride = 3 * columns;
+  size_t     moved = 0;
+  for (long c = 0; c < columns; ++c)
+  {
+    double * column = mesh.Points.data() + 3 * c;
+    // How far the point at row r lies off the cubic through `x`.
+    auto off = [&](const std::array<long, 4> & x, long r, double fitted[3]) {
+      LineCubic(column, stride, x, r, fitted);
+      return InPlane(column + stride * r, fitted);
+    };
+    for (long r = 2; r + 2 < count; ++r)
+    {
+      double fitted[3], check[3];
+      if (!(off({ r - 2, r - 1, r + 1, r + 2 }, r, fitted) > limit))
+      {
+        continue;
+      }
+      // Rows r - 1 and r + 1 each lie on the cubic through their own neighbours, row r left
+      // out (three rows on the side away from r where the grid ends within two).
+      const bool belowFits = off(r >= 3 ? std::array<long, 4>{ r - 3, r - 2, r + 1, r + 2 }
+                                        : std::array<long, 4>{ r - 2, r + 1, r + 2, r + 3 },
+                                 r - 1,
+                                 check) <= 0.5 * limit;
+      const bool aboveFits = off(r + 3 < count ? std::array<long, 4>{ r - 2, r - 1, r + 2, r + 3 }
+                                               : std::array<long, 4>{ r - 3, r - 2, r - 1, r + 2 },
+                                 r + 1,
+                                 check) <= 0.5 * limit;
+      if (belowFits && aboveFits)
+      {
+        std::copy(fitted, fitted + 3, column + stride * r);
+        ++moved;
       }
     }
   }

@@ -803,6 +803,18 @@ Extraction::BuildMesh()
     // holds a touch's edge along the axis) leaves the row's curve for a point or two, by
     // about a turn spacing; where the turns press together, the next turn lies about a
     // sheet's thickness away, and the row bends towards it over three columns.
+    // A row whose window of slices held a trace on the neighbouring turn over part of the
+    // sheet leaves its columns' course along the axis there, where the rows about it agree.
+    m_Report.ColumnSpikesSmoothed =
+      SheetMidSurfaceExtractor::SmoothColumnSpikes(mesh, GridStepFraction * m_Report.TurnSpacing);
+    if (m_Report.ColumnSpikesSmoothed > 0)
+    {
+      std::ostringstream text;
+      text << m_Report.ColumnSpikesSmoothed << " grid point(s) off their column's course along the axis by more than "
+           << GridStepFraction << " of the turn spacing, where the rows either side agree (a row partly on the "
+           << "neighbouring turn), were put back on it";
+      m_Report.Warnings.push_back(text.str());
+    }
     m_Report.RowSpikesSmoothed =
       SheetMidSurfaceExtractor::SmoothRowSpikes(mesh, GridStepFraction * m_Report.TurnSpacing);
     const double touchLimit = std::max(m_Report.SheetThickness, voxel);

@@ -573,6 +573,60 @@ TEST(SheetMidSurfaceExtractor, BumpsTowardsATouchingTurnArePutBack)
   EXPECT_EQ(mesh.Points, pushed);
 }
 
+// One row whose window of slices held a trace on the neighbouring turn over part of the
+// sheet: its points there leave their columns' course along the axis by a turn spacing
+// while the rows about them agree. They are put back; two neighbouring rows pushed alike
+// (the sheet's own course), a push below 0.7 of a turn spacing and a push in an end row are
+// left as they are. Rows, columns and directions drawn at run time.
+TEST(SheetMidSurfaceExtractor, ARowOnTheNextTurnOverAFewColumnsIsPutBack)
+{
+  std::mt19937              random(vu::RunTimeSeed());
+  SpiralGrid                spiral;
+  itk::SheetMesh &          mesh = spiral.Mesh;
+  const std::vector<double> theta = spiral.Theta;
+  const int                 columns = spiral.Columns;
+  const std::vector<double> truth = mesh.Points;
+  const double              spacing = 6.0;
+  EXPECT_EQ(itk::SheetMidSurfaceExtractor::SmoothColumnSpikes(mesh, 0.7 * spacing), 0u);
+  EXPECT_EQ(mesh.Points, truth);
+
+  // Radial pushes (outwards for positive sizes) of columns [from, to] of row r.
+  auto push = [&](int r, int from, int to, double size) {
+    for (int c = from; c <= to; ++c)
+    {
+      const size_t p = static_cast<size_t>(r * columns + c);
+      mesh.Points[3 * p] += size * std::cos(theta[c]);
+      mesh.Points[3 * p + 1] += size * std::sin(theta[c]);
+    }
+  };
+  // Each case in its own quarter of the columns, so that none lies in another's rows.
+  const int                          quarter = columns / 4;
+  std::uniform_int_distribution<int> middleRow(2, 5), start(0, quarter - 6);
+  std::bernoulli_distribution        outwards(0.5);
+  const int                          row = middleRow(random), from = start(random);
+  push(row, from, from + 4, (outwards(random) ? 1.0 : -1.0) * spacing);
+  const int pair = std::uniform_int_distribution<int>(2, 4)(random);
+  const int pairFrom = quarter + start(random);
+  push(pair, pairFrom, pairFrom + 2, spacing);
+  push(pair + 1, pairFrom, pairFrom + 2, spacing);
+  const int smallFrom = 2 * quarter + start(random);
+  push(middleRow(random), smallFrom, smallFrom + 5, 0.6 * spacing);
+  push(outwards(random) ? 0 : 7, 3 * quarter + start(random), 3 * quarter + quarter - 2, spacing);
+  const std::vector<double> pushed = mesh.Points;
+  EXPECT_EQ(itk::SheetMidSurfaceExtractor::SmoothColumnSpikes(mesh, 0.7 * spacing), 5u);
+  double farthest = 0.0;
+  for (int c = from; c <= from + 4; ++c)
+  {
+    const size_t p = static_cast<size_t>(row * columns + c);
+    farthest =
+      std::max(farthest, std::hypot(mesh.Points[3 * p] - truth[3 * p], mesh.Points[3 * p + 1] - truth[3 * p + 1]));
+    std::copy(pushed.begin() + 3 * p, pushed.begin() + 3 * p + 3, mesh.Points.begin() + 3 * p);
+  }
+  std::cout << "row put back within " << farthest << " voxel of the spiral" << std::endl;
+  EXPECT_LT(farthest, 1e-9);
+  EXPECT_EQ(mesh.Points, pushed);
+}
+
 TEST(SheetMidSurfaceExtractor, OffSheetRunsNameAMeshTracedBetweenTurns)
 {
   // The spiral's mask as intensities (air 0, sheet 1): the mesh traced on it lies on the

@@ -300,6 +300,7 @@ TraceJson(const itk::SheetMidSurfaceReport & report)
     json["turns"] = report.Turns;
     json["turn_spacing_mm"] = report.TurnSpacing;
     json["row_spikes_smoothed"] = report.RowSpikesSmoothed;
+    json["column_spikes_smoothed"] = report.ColumnSpikesSmoothed;
     json["mean_confidence"] = count > 0 ? sum / static_cast<double>(count) : 0.0;
   }
   return json;
