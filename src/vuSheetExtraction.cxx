@@ -799,10 +799,6 @@ Extraction::BuildMesh()
       const double z = mesh.Points[3 * (row * columns + column) + 2];
       return static_cast<size_t>(std::clamp(std::lround(z / sz), 0L, static_cast<long>(nz) - 1));
     };
-    // A column taken onto the neighbouring turn in one row's slices only (the row's window
-    // holds a touch's edge along the axis) leaves the row's curve for a point or two, by
-    // about a turn spacing; where the turns press together, the next turn lies about a
-    // sheet's thickness away, and the row bends towards it over three columns.
     // A row whose window of slices held a trace on the neighbouring turn over part of the
     // sheet leaves its columns' course along the axis there, where the rows about it agree.
     m_Report.ColumnSpikesSmoothed =
@@ -815,6 +811,10 @@ Extraction::BuildMesh()
            << "neighbouring turn), were put back on it";
       m_Report.Warnings.push_back(text.str());
     }
+    // A column taken onto the neighbouring turn in one row's slices only (the row's window
+    // holds a touch's edge along the axis) leaves the row's curve for a point or two, by
+    // about a turn spacing; where the turns press together, the next turn lies about a
+    // sheet's thickness away, and the row bends towards it over three columns.
     m_Report.RowSpikesSmoothed =
       SheetMidSurfaceExtractor::SmoothRowSpikes(mesh, GridStepFraction * m_Report.TurnSpacing);
     const double touchLimit = std::max(m_Report.SheetThickness, voxel);
