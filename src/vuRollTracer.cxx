@@ -645,15 +645,71 @@ TraceGuided(const Tracer & tracer, const SliceCrossings & crossings, size_t slic
   return trace;
 }
 
+// The prior for the slice after one traced as `trace` with `prior`: the trace, and beyond
+// an end at which it stopped more than DropTolerance of arc short of its prior, the
+// prior's stretch, offset to meet the trace's end. A slice that misses the last piece of a
+// turn (noise at the place where a roll cut by the field of view comes back into it, a faint
+// stretch) would otherwise take that piece from every slice after it, and they would all be
+// dropped as traced only in part. `carried` counts, per end, the slices in a row whose
+// prior was carried on so; after MaximumCarried of them the end is taken as the trace's
+// (the sheet's edge along the axis cuts the turn there).
+constexpr long MaximumCarried = 8;
+
+Tracer::Trace
+CarryShortEnds(const Tracer::Trace & trace,
+               const Tracer::Trace & prior,
+               long                  carried[2],
+               const PolarFrame &    frame,
+               double                voxel)
+{
+  Tracer::Trace next = trace;
+  for (int end = 0; end < 2; ++end)
+  {
+    const long   at = end == 0 ? trace.First : trace.Last();
+    const long   beyond = end == 0 ? prior.First : prior.Last();
+    const bool   shorter = end == 0 ? beyond < at : beyond > at;
+    const double tolerance = ArcSteps(DropTolerance * voxel, trace.At(at), voxel, frame);
+    if (!shorter || !prior.Covers(at) || static_cast<double>(std::abs(beyond - at)) <= tolerance ||
+        carried[end] >= MaximumCarried)
+    {
+      carried[end] = 0;
+      continue;
+    }
+    ++carried[end];
+    const double offset = trace.At(at) - prior.At(at);
+    if (end == 1)
+    {
+      for (long m = at + 1; m <= beyond; ++m)
+      {
+        next.Rho.push_back(prior.At(m) + offset);
+        next.Confirmed.push_back(0);
+      }
+    }
+    else
+    {
+      std::vector<double> rho;
+      for (long m = beyond; m < at; ++m)
+      {
+        rho.push_back(prior.At(m) + offset);
+      }
+      next.Rho.insert(next.Rho.begin(), rho.begin(), rho.end());
+      next.Confirmed.insert(next.Confirmed.begin(), rho.size(), 0);
+      next.First = beyond;
+    }
+  }
+  return next;
+}
+
 // Every slice from the seed outwards in direction `dir` (+1 or -1), each traced with the
-// previous slice's trace as prior; the crossings of a batch of slices found in parallel.
-// `done` counts the slices traced; `report` is called after each batch.
+// previous slice's trace as prior (CarryShortEnds); the crossings of a batch of slices
+// found in parallel. `done` counts the slices traced; `report` is called after each batch.
 void
 TraceOutwards(const Tracer &                tracer,
               const Tracer::Trace &         seedTrace,
               const std::vector<size_t> &   material,
               long                          seedIndex,
               int                           dir,
+              double                        voxel,
               std::vector<Tracer::Trace> &  traces,
               std::atomic<size_t> &         done,
               const std::function<void()> & report)
@@ -661,6 +717,7 @@ TraceOutwards(const Tracer &                tracer,
   const size_t  batch = 16;
   Tracer::Trace prior = seedTrace;
   long          rejected = 0;
+  long          carried[2] = { 0, 0 };
   for (long q = dir > 0 ? seedIndex : seedIndex - 1; q >= 0 && q < static_cast<long>(material.size());)
   {
     std::vector<size_t> slices;
@@ -695,7 +752,7 @@ TraceOutwards(const Tracer &                tracer,
         continue;
       }
       rejected = 0;
-      prior = traces[slices[i]];
+      prior = CarryShortEnds(traces[slices[i]], prior, carried, tracer.Frame(), voxel);
     }
     q += dir * static_cast<long>(slices.size());
     done += slices.size();
@@ -821,7 +878,9 @@ TraceRoll(const SheetVolumeView &             volume,
       progress(0.1 + 0.85 * static_cast<double>(done) / static_cast<double>(material.size()));
     }
   };
-  auto outwards = [&](int dir) { TraceOutwards(tracer, seedTrace, material, seedIndex, dir, traces, done, report); };
+  auto outwards = [&](int dir) {
+    TraceOutwards(tracer, seedTrace, material, seedIndex, dir, settings.Voxel, traces, done, report);
+  };
   RunTogether({ [&]() { outwards(+1); }, [&]() { outwards(-1); } });
 
   MatchEndsToNeighbours(traces, material, tracer.Frame(), settings.Voxel);
