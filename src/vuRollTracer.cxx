@@ -219,17 +219,23 @@ MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
   }
 }
 // A sheet's cut edges run along the roll axis in a straight or slowly drifting line: the
-// ends of the traces, as functions of the slice, are fitted by lines over the middle 60 %
-// of the slices, and a trace whose end lies further than DropTolerance of arc from its
+// ends of the traces, as functions of the slice, are fitted robustly by lines over the
+// middle 60 % of the slices, and a trace whose end lies further than DropTolerance of arc from its
 // line (a slice that cuts the sheet's edge along the axis, faint and blurred; a trace lost
 // before the end) is dropped: the mesh interpolates that slice from its neighbours, or
-// ends before it.
+// ends before it. An end within EdgeReach of where the scan holds no data is where a field
+// of view that cuts the roll cuts the sheet, not the sheet's end: where the edge of the data
+// moves across the roll from slice to slice (a tilted roll resampled), the piece of a turn
+// that comes back into view beyond a cut is there in some slices and not in others, and the
+// ends step from one place to the other. Such ends neither count in the line nor drop their
+// trace.
 constexpr double DropTolerance = 8.0; // voxels
+constexpr double EdgeReach = 3.0;     // voxels
 
 size_t
 DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
                      const std::vector<size_t> &  slices,
-                     const PolarFrame &           frame,
+                     const Tracer &               tracer,
                      double                       voxel)
 {
   const size_t n = slices.size();
@@ -237,54 +243,85 @@ DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
   {
     return 0;
   }
+  const PolarFrame & frame = tracer.Frame();
   // The angular index of a trace's inner (end 0) or outer (end 1) end, and whether it lies
   // further than the tolerance from a line of (slice, end).
-  auto endOf = [](const Tracer::Trace & t, int end) { return end == 0 ? t.First : t.Last(); };
+  auto              endOf = [](const Tracer::Trace & t, int end) { return end == 0 ? t.First : t.Last(); };
+  std::vector<char> atEdge(2 * n, 0);
+  for (size_t i = 0; i < n; ++i)
+  {
+    const Tracer::Trace & t = traces[slices[i]];
+    for (int end = 0; end < 2 && !t.Empty(); ++end)
+    {
+      const long m = endOf(t, end);
+      atEdge[2 * i + static_cast<size_t>(end)] = tracer.NearDataEdge(slices[i], m, t.At(m), EdgeReach * voxel) ? 1 : 0;
+    }
+  }
   auto offLine = [&](size_t i, int end, const double line[2]) {
     const Tracer::Trace & t = traces[slices[i]];
     const long            m = endOf(t, end);
     const double          tolerance = ArcSteps(DropTolerance * voxel, t.At(m), voxel, frame);
     return std::abs(static_cast<double>(m) - line[0] - line[1] * static_cast<double>(i)) > tolerance;
   };
-  // Least-squares line of (slice, end) over the middle traces, refitted once without the
-  // ones further than the tolerance.
+  // The line of (slice, end) over the middle traces: fitted robustly first (Theil and Sen:
+  // the median of the slopes between every two traces, then the median offset), then by
+  // least squares over the traces within the tolerance of it. Where the ends of a group of
+  // slices step away from the others' (a trace that lost the last piece of a turn, and
+  // every slice after it), least squares alone gives a line between the two groups, off
+  // both: the whole ones were dropped with the short ones.
   auto fit = [&](int end, double line[2]) {
-    std::vector<char> use(n, 0);
+    std::vector<size_t> used;
     for (size_t i = n / 5; i < n - n / 5; ++i)
     {
-      use[i] = traces[slices[i]].Empty() ? 0 : 1;
+      if (!traces[slices[i]].Empty() && atEdge[2 * i + static_cast<size_t>(end)] == 0)
+      {
+        used.push_back(i);
+      }
     }
-    for (int pass = 0; pass < 2; ++pass)
+    if (used.size() < 3)
     {
-      LineFit points;
-      for (size_t i = 0; i < n; ++i)
+      return false;
+    }
+    auto                at = [&](size_t i) { return static_cast<double>(endOf(traces[slices[i]], end)); };
+    const auto          stride = std::max<size_t>(1, used.size() / 200);
+    std::vector<double> values;
+    for (size_t p = 0; p < used.size(); p += stride)
+    {
+      for (size_t q = p + stride; q < used.size(); q += stride)
       {
-        if (use[i] != 0)
-        {
-          points.Add(static_cast<double>(i), static_cast<double>(endOf(traces[slices[i]], end)));
-        }
+        values.push_back((at(used[q]) - at(used[p])) / static_cast<double>(used[q] - used[p]));
       }
-      if (points.N < 3.0)
+    }
+    line[1] = Median(values);
+    values.clear();
+    for (size_t i : used)
+    {
+      values.push_back(at(i) - line[1] * static_cast<double>(i));
+    }
+    line[0] = Median(values);
+    LineFit points;
+    for (size_t i : used)
+    {
+      if (!offLine(i, end, line))
       {
-        return false;
+        points.Add(static_cast<double>(i), at(i));
       }
+    }
+    if (points.N >= 3.0)
+    {
       points.Solve(line[0], line[1]);
-      for (size_t i = 0; i < n && pass == 0; ++i)
-      {
-        use[i] = use[i] != 0 && !offLine(i, end, line) ? 1 : 0;
-      }
     }
     return true;
   };
-  double firstLine[2], lastLine[2];
-  if (!fit(0, firstLine) || !fit(1, lastLine))
-  {
-    return 0;
-  }
+  double     lines[2][2];
+  const bool fitted[2] = { fit(0, lines[0]), fit(1, lines[1]) };
+  auto       dropEnd = [&](size_t i, int end) {
+    return fitted[end] && atEdge[2 * i + static_cast<size_t>(end)] == 0 && offLine(i, end, lines[end]);
+  };
   size_t dropped = 0;
   for (size_t i = 0; i < n; ++i)
   {
-    if (!traces[slices[i]].Empty() && (offLine(i, 0, firstLine) || offLine(i, 1, lastLine)))
+    if (!traces[slices[i]].Empty() && (dropEnd(i, 0) || dropEnd(i, 1)))
     {
       traces[slices[i]] = Tracer::Trace{};
       ++dropped;
@@ -884,7 +921,7 @@ TraceRoll(const SheetVolumeView &             volume,
   RunTogether({ [&]() { outwards(+1); }, [&]() { outwards(-1); } });
 
   MatchEndsToNeighbours(traces, material, tracer.Frame(), settings.Voxel);
-  result.Incomplete = DropIncompleteTraces(traces, material, tracer.Frame(), settings.Voxel);
+  result.Incomplete = DropIncompleteTraces(traces, material, tracer, settings.Voxel);
 
   // Neighbouring traces that disagree by half a turn spacing at the same angle: a turn
   // was lost or jumped between them.

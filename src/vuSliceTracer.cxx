@@ -667,6 +667,30 @@ Tracer::Explained(const SliceCrossings & crossings, const Trace & trace) const
   return total > 0 ? static_cast<double>(onTrace) / static_cast<double>(total) : 0.0;
 }
 
+bool
+Tracer::NearDataEdge(size_t slice, long m, double rho, double reach) const
+{
+  const ValueSlice sampler(m_Volume, m_Values, slice);
+  double           c[2];
+  Centre(slice, c);
+  const double angle = static_cast<double>(m) * m_Frame.Step;
+  const double x = c[0] + rho * std::cos(angle), y = c[1] + rho * std::sin(angle);
+  if (!sampler.Inside(x, y))
+  {
+    return true;
+  }
+  constexpr int directions = 8;
+  for (int d = 0; d < directions; ++d)
+  {
+    const double a = 2.0 * Pi * static_cast<double>(d) / static_cast<double>(directions);
+    if (!sampler.Inside(x + reach * std::cos(a), y + reach * std::sin(a)))
+    {
+      return true;
+    }
+  }
+  return false;
+}
+
 Polyline
 Tracer::ToPolyline(const Trace & trace, size_t slice) const
 {

@@ -444,6 +444,12 @@ public:
   Polyline
   ToPolyline(const Trace & trace, size_t slice) const;
 
+  // Whether the point at angular index `m` and radius `rho` of slice `slice` lies within
+  // `reach` (mm) of where the scan holds no data (ValueSlice::Inside): the edge of a field
+  // of view that cuts the roll.
+  bool
+  NearDataEdge(size_t slice, long m, double rho, double reach) const;
+
 private:
   const SheetVolumeView & m_Volume;
   const float *           m_Values;
