@@ -107,6 +107,30 @@ ArcSteps(double arc, double rho, double voxel, const PolarFrame & frame)
 constexpr long   EndReach = 5;
 constexpr double EndTolerance = 4.0; // voxels
 
+// `trace` extended at its end `end` (0: inner, 1: outer) to the angular index `target` on
+// `guide`'s curve, offset by `offset`; the steps added are unconfirmed.
+void
+ExtendAlong(Tracer::Trace & trace, const Tracer::Trace & guide, int end, long target, double offset)
+{
+  if (end == 1)
+  {
+    for (long m = trace.Last() + 1; m <= target; ++m)
+    {
+      trace.Rho.push_back(guide.At(m) + offset);
+      trace.Confirmed.push_back(0);
+    }
+    return;
+  }
+  std::vector<double> rho;
+  for (long m = target; m < trace.First; ++m)
+  {
+    rho.push_back(guide.At(m) + offset);
+  }
+  trace.Rho.insert(trace.Rho.begin(), rho.begin(), rho.end());
+  trace.Confirmed.insert(trace.Confirmed.begin(), rho.size(), 0);
+  trace.First = std::min(trace.First, target);
+}
+
 void
 MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
                       const std::vector<size_t> &  slices,
@@ -194,25 +218,7 @@ MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
           ++used;
         }
         const double offset = used > 0 ? sum / static_cast<double>(used) : 0.0;
-        if (end == 1)
-        {
-          for (long m = at + 1; m <= target; ++m)
-          {
-            trace.Rho.push_back(neighbour->At(m) + offset);
-            trace.Confirmed.push_back(0);
-          }
-        }
-        else
-        {
-          std::vector<double> rho;
-          for (long m = target; m < at; ++m)
-          {
-            rho.push_back(neighbour->At(m) + offset);
-          }
-          trace.Rho.insert(trace.Rho.begin(), rho.begin(), rho.end());
-          trace.Confirmed.insert(trace.Confirmed.begin(), rho.size(), 0);
-          trace.First = target;
-        }
+        ExtendAlong(trace, *neighbour, end, target, offset);
         break;
       }
     }
@@ -714,25 +720,7 @@ CarryShortEnds(const Tracer::Trace & trace,
     }
     ++carried[end];
     const double offset = trace.At(at) - prior.At(at);
-    if (end == 1)
-    {
-      for (long m = at + 1; m <= beyond; ++m)
-      {
-        next.Rho.push_back(prior.At(m) + offset);
-        next.Confirmed.push_back(0);
-      }
-    }
-    else
-    {
-      std::vector<double> rho;
-      for (long m = beyond; m < at; ++m)
-      {
-        rho.push_back(prior.At(m) + offset);
-      }
-      next.Rho.insert(next.Rho.begin(), rho.begin(), rho.end());
-      next.Confirmed.insert(next.Confirmed.begin(), rho.size(), 0);
-      next.First = beyond;
-    }
+    ExtendAlong(next, prior, end, beyond, offset);
   }
   return next;
 }
