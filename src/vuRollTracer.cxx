@@ -236,7 +236,6 @@ MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
 // ends step from one place to the other. Such ends neither count in the line nor drop their
 // trace.
 constexpr double DropTolerance = 8.0; // voxels
-constexpr double EdgeReach = 3.0;     // voxels
 
 size_t
 DropIncompleteTraces(std::vector<Tracer::Trace> & traces,

@@ -426,9 +426,10 @@ Tracer::Follow(const SliceCrossings &    crossings,
     }
     const double x = centre[0] + predicted * std::cos(static_cast<double>(m) * m_Frame.Step);
     const double y = centre[1] + predicted * std::sin(static_cast<double>(m) * m_Frame.Step);
-    const bool   outside = !slice.Inside(x, y);
+    const bool   outside = slice.NearEdge(x, y, EdgeReach * voxel);
     // No material lies beyond the frame's reach within the scan's data; outside it (a roll
-    // cut by the field of view) the turn is carried on, as below.
+    // cut by the field of view, or within EdgeReach of where the data ends) the turn is
+    // carried on, as below.
     if (predicted > m_Frame.RMax && !outside)
     {
       break;
@@ -674,21 +675,7 @@ Tracer::NearDataEdge(size_t slice, long m, double rho, double reach) const
   double           c[2];
   Centre(slice, c);
   const double angle = static_cast<double>(m) * m_Frame.Step;
-  const double x = c[0] + rho * std::cos(angle), y = c[1] + rho * std::sin(angle);
-  if (!sampler.Inside(x, y))
-  {
-    return true;
-  }
-  constexpr int directions = 8;
-  for (int d = 0; d < directions; ++d)
-  {
-    const double a = 2.0 * Pi * static_cast<double>(d) / static_cast<double>(directions);
-    if (!sampler.Inside(x + reach * std::cos(a), y + reach * std::sin(a)))
-    {
-      return true;
-    }
-  }
-  return false;
+  return sampler.NearEdge(c[0] + rho * std::cos(angle), c[1] + rho * std::sin(angle), reach);
 }
 
 Polyline

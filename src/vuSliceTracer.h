@@ -65,6 +65,15 @@ constexpr long DataMargin = 3;
 // A turn carried through a stretch out of the field of view keeps at least this fraction of
 // its learnt distance from the turn before.
 constexpr double CarriedDistance = 0.6;
+// Voxels beyond DataMargin within which the scan's data ends: a turn predicted there is
+// treated as out of the field of view (carried, not lost where its crossing is missing),
+// and a trace's end there is where the field of view cuts the sheet, not the sheet's end.
+// The edge of the data moves across the roll from slice to slice (a tilted roll resampled),
+// and the sheet next to it is blurred with the air beyond it: a neighbouring slice whose
+// trace carried the turn through a few voxels further out would otherwise guide this one
+// into a stretch just inside the margin where its crossing is not found, and the trace
+// would stop there, with every turn after it lost.
+constexpr double EdgeReach = 3.0;
 
 // Least-squares line y = intercept + slope x through the points added.
 struct LineFit
@@ -147,6 +156,27 @@ public:
       }
     }
     return true;
+  }
+
+  // Outside (Inside() false), or within `reach` (mm) of a point outside in one of eight
+  // directions.
+  bool
+  NearEdge(double x, double y, double reach) const
+  {
+    if (!Inside(x, y))
+    {
+      return true;
+    }
+    constexpr int directions = 8;
+    for (int d = 0; d < directions; ++d)
+    {
+      const double a = 2.0 * Pi * static_cast<double>(d) / static_cast<double>(directions);
+      if (!Inside(x + reach * std::cos(a), y + reach * std::sin(a)))
+      {
+        return true;
+      }
+    }
+    return false;
   }
 
   double
