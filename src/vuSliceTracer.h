@@ -167,11 +167,15 @@ public:
     {
       return true;
     }
-    constexpr int directions = 8;
-    for (int d = 0; d < directions; ++d)
+    // Called at every step of a trace: the eight unit directions are constants.
+    constexpr double diagonal = 0.70710678118654752440;
+    constexpr double directions[8][2] = { { 1.0, 0.0 },  { diagonal, diagonal },
+                                          { 0.0, 1.0 },  { -diagonal, diagonal },
+                                          { -1.0, 0.0 }, { -diagonal, -diagonal },
+                                          { 0.0, -1.0 }, { diagonal, -diagonal } };
+    for (const auto & d : directions)
     {
-      const double a = 2.0 * Pi * static_cast<double>(d) / static_cast<double>(directions);
-      if (!Inside(x + reach * std::cos(a), y + reach * std::sin(a)))
+      if (!Inside(x + reach * d[0], y + reach * d[1]))
       {
         return true;
       }
