@@ -131,6 +131,23 @@ ExtendAlong(Tracer::Trace & trace, const Tracer::Trace & guide, int end, long ta
   trace.First = std::min(trace.First, target);
 }
 
+// `trace` continued at its end `end` to `target` along `neighbour`'s curve (which covers
+// that end), offset by the mean distance between the two over the last quarter turn both
+// have.
+void
+ContinueAlong(Tracer::Trace & trace, const Tracer::Trace & neighbour, int end, long target, const PolarFrame & frame)
+{
+  double sum = 0.0;
+  long   used = 0;
+  for (long m = end == 0 ? trace.First : trace.Last(); used < frame.Rays / 4 && trace.Covers(m) && neighbour.Covers(m);
+       m += end == 0 ? 1 : -1)
+  {
+    sum += trace.At(m) - neighbour.At(m);
+    ++used;
+  }
+  ExtendAlong(trace, neighbour, end, target, used > 0 ? sum / static_cast<double>(used) : 0.0);
+}
+
 void
 MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
                       const std::vector<size_t> &  slices,
@@ -209,16 +226,7 @@ MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
         {
           continue;
         }
-        // Offset from the neighbour over the last quarter turn both have.
-        double sum = 0.0;
-        long   used = 0;
-        for (long m = at; used < frame.Rays / 4 && trace.Covers(m) && neighbour->Covers(m); m += end == 0 ? 1 : -1)
-        {
-          sum += trace.At(m) - neighbour->At(m);
-          ++used;
-        }
-        const double offset = used > 0 ? sum / static_cast<double>(used) : 0.0;
-        ExtendAlong(trace, *neighbour, end, target, offset);
+        ContinueAlong(trace, *neighbour, end, target, frame);
         break;
       }
     }
@@ -226,23 +234,26 @@ MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
 }
 // A sheet's cut edges run along the roll axis in a straight or slowly drifting line: the
 // ends of the traces, as functions of the slice, are fitted robustly by lines over the
-// middle 60 % of the slices, and a trace whose end lies further than DropTolerance of arc from its
-// line (a slice that cuts the sheet's edge along the axis, faint and blurred; a trace lost
-// before the end) is dropped: the mesh interpolates that slice from its neighbours, or
-// ends before it. An end within EdgeReach of where the scan holds no data is where a field
-// of view that cuts the roll cuts the sheet, not the sheet's end: where the edge of the data
-// moves across the roll from slice to slice (a tilted roll resampled), the piece of a turn
-// that comes back into view beyond a cut is there in some slices and not in others, and the
-// ends step from one place to the other. Such ends neither count in the line nor drop their
-// trace.
+// middle 60 % of the slices, and a trace whose end lies further than DropTolerance of arc
+// from its line (a slice that cuts the sheet's edge along the axis, faint and blurred; a
+// trace lost before the end) is dropped, unless it stopped less than a turn short and can
+// be continued along another slice's curve (below): the mesh interpolates a dropped slice
+// from its neighbours, or ends before it. An end within EdgeReach of where the scan holds
+// no data is where a field of view that cuts the roll cuts the sheet, not the sheet's end:
+// where the edge of the data moves across the roll from slice to slice (a tilted roll
+// resampled), the piece of a turn that comes back into view beyond a cut is there in some
+// slices and not in others, and the ends step from one place to the other. Such ends
+// neither count in the line nor drop their trace.
 constexpr double DropTolerance = 8.0; // voxels
 
 size_t
 DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
                      const std::vector<size_t> &  slices,
                      const Tracer &               tracer,
-                     double                       voxel)
+                     double                       voxel,
+                     size_t &                     continued)
 {
+  continued = 0;
   const size_t n = slices.size();
   if (n < 5)
   {
@@ -323,13 +334,63 @@ DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
   auto       dropEnd = [&](size_t i, int end) {
     return fitted[end] && atEdge[2 * i + static_cast<size_t>(end)] == 0 && offLine(i, end, lines[end]);
   };
-  size_t dropped = 0;
+  // A trace that stops short of its line by less than a turn, at an end where another slice
+  // reaches the line, is first continued along the nearest such slice's curve: the turns
+  // change slowly along the axis, and a group of slices that lost the last piece of a turn
+  // alike (a faint stretch by the sheet's edge along the axis) would otherwise all be
+  // left out, and the mesh end before them. It is dropped if it is still off its line.
+  std::vector<char> whole(n, 0);
   for (size_t i = 0; i < n; ++i)
   {
-    if (!traces[slices[i]].Empty() && (dropEnd(i, 0) || dropEnd(i, 1)))
+    whole[i] = !traces[slices[i]].Empty() && !dropEnd(i, 0) && !dropEnd(i, 1) ? 1 : 0;
+  }
+  const std::vector<Tracer::Trace> original = traces;
+  size_t                           dropped = 0;
+  for (size_t i = 0; i < n; ++i)
+  {
+    Tracer::Trace & trace = traces[slices[i]];
+    if (trace.Empty() || whole[i])
     {
-      traces[slices[i]] = Tracer::Trace{};
+      continue;
+    }
+    for (int end = 0; end < 2; ++end)
+    {
+      const long at = endOf(trace, end);
+      if (!dropEnd(i, end))
+      {
+        continue;
+      }
+      const auto target = static_cast<long>(std::lround(lines[end][0] + lines[end][1] * static_cast<double>(i)));
+      if ((end == 0 ? at - target : target - at) <= 0 || std::abs(target - at) > frame.Rays)
+      {
+        continue; // it runs on past its line, or lost more than a turn
+      }
+      for (size_t d = 1; d < n; ++d)
+      {
+        const Tracer::Trace * guide = nullptr;
+        for (const size_t j : { i - d, i + d }) // i - d wraps past 0 to beyond n
+        {
+          if (j < n && whole[j] && original[slices[j]].Covers(at) && original[slices[j]].Covers(target))
+          {
+            guide = &original[slices[j]];
+            break;
+          }
+        }
+        if (guide != nullptr)
+        {
+          ContinueAlong(trace, *guide, end, endOf(*guide, end), frame);
+          break;
+        }
+      }
+    }
+    if (dropEnd(i, 0) || dropEnd(i, 1))
+    {
+      trace = Tracer::Trace{};
       ++dropped;
+    }
+    else
+    {
+      ++continued;
     }
   }
   return dropped;
@@ -908,7 +969,7 @@ TraceRoll(const SheetVolumeView &             volume,
   RunTogether({ [&]() { outwards(+1); }, [&]() { outwards(-1); } });
 
   MatchEndsToNeighbours(traces, material, tracer.Frame(), settings.Voxel);
-  result.Incomplete = DropIncompleteTraces(traces, material, tracer, settings.Voxel);
+  result.Incomplete = DropIncompleteTraces(traces, material, tracer, settings.Voxel, result.Continued);
 
   // Neighbouring traces that disagree by half a turn spacing at the same angle: a turn
   // was lost or jumped between them.

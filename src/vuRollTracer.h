@@ -79,6 +79,9 @@ struct Result
   /** Slices whose trace ended far from the line of the other slices' ends (the sheet's
    * edge along the axis, a trace lost before the end): dropped, to be interpolated. */
   size_t Incomplete{ 0 };
+  /** Slices whose trace stopped short of that line by less than a turn: continued to it
+   * along the nearest whole slice's curve (unconfirmed steps), not dropped. */
+  size_t Continued{ 0 };
   /** Where neighbouring slices' traces disagree by more than half a turn: slice, turn. */
   std::vector<std::pair<size_t, double>> Disagreements;
 };

@@ -26,6 +26,8 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <string>
+#include <utility>
 
 namespace itk {
 namespace SheetTracing {
@@ -295,13 +297,19 @@ Extraction::TraceSlices()
       rollCentreOffset[0] = roll.CentreOffset[0];
       rollCentreOffset[1] = roll.CentreOffset[1];
       m_Report.Turns = roll.Slices[nz / 2].Turns;
-      if (roll.Incomplete > 0)
+      for (const auto & [count, what] :
+           { std::make_pair(
+               roll.Incomplete,
+               " slice(s) traced only in part (their trace ends far from the other slices' ends: the "
+               "sheet's edge along the axis, or a trace lost before the end) were left out or interpolated"),
+             std::make_pair(roll.Continued,
+                            " slice(s) whose trace stopped short of the other slices' ends by less than a turn were "
+                            "continued to them along the nearest whole slice's curve") })
       {
-        std::ostringstream text;
-        text << roll.Incomplete
-             << " slice(s) traced only in part (their trace ends far from the other slices' ends: the sheet's edge "
-                "along the axis, or a trace lost before the end) were left out or interpolated";
-        m_Report.Warnings.push_back(text.str());
+        if (count > 0)
+        {
+          m_Report.Warnings.push_back(std::to_string(count) + what);
+        }
       }
       for (const auto & [slice, turn] : roll.Disagreements)
       {
