@@ -148,6 +148,32 @@ ContinueAlong(Tracer::Trace & trace, const Tracer::Trace & neighbour, int end, l
   ExtendAlong(trace, neighbour, end, target, used > 0 ? sum / static_cast<double>(used) : 0.0);
 }
 
+// The trace nearest slices[i] (at most `reach` slices away; at equal distances the one
+// before) that `usable` accepts and that covers the angular indices `from` and `to`;
+// nullptr if none does.
+template <typename Usable>
+const Tracer::Trace *
+NearestCovering(const std::vector<Tracer::Trace> & traces,
+                const std::vector<size_t> &        slices,
+                size_t                             i,
+                size_t                             reach,
+                long                               from,
+                long                               to,
+                Usable                             usable)
+{
+  for (size_t d = 1; d <= reach; ++d)
+  {
+    for (const size_t j : { i - d, i + d }) // i - d wraps past 0 to beyond the slices
+    {
+      if (j < slices.size() && usable(j) && traces[slices[j]].Covers(from) && traces[slices[j]].Covers(to))
+      {
+        return &traces[slices[j]];
+      }
+    }
+  }
+  return nullptr;
+}
+
 void
 MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
                       const std::vector<size_t> &  slices,
@@ -210,24 +236,11 @@ MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
       {
         continue;
       }
-      for (long d = 1; d <= EndReach; ++d)
+      const Tracer::Trace * neighbour =
+        NearestCovering(original, slices, static_cast<size_t>(i), EndReach, at, target, [](size_t) { return true; });
+      if (neighbour != nullptr)
       {
-        const Tracer::Trace * neighbour = nullptr;
-        for (long j : { i - d, i + d })
-        {
-          if (j >= 0 && j < n && original[slices[static_cast<size_t>(j)]].Covers(target) &&
-              original[slices[static_cast<size_t>(j)]].Covers(at))
-          {
-            neighbour = &original[slices[static_cast<size_t>(j)]];
-            break;
-          }
-        }
-        if (neighbour == nullptr)
-        {
-          continue;
-        }
         ContinueAlong(trace, *neighbour, end, target, frame);
-        break;
       }
     }
   }
@@ -273,11 +286,12 @@ DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
       atEdge[2 * i + static_cast<size_t>(end)] = tracer.NearDataEdge(slices[i], m, t.At(m), EdgeReach * voxel) ? 1 : 0;
     }
   }
+  auto lineAt = [](const double line[2], size_t i) { return line[0] + line[1] * static_cast<double>(i); };
   auto offLine = [&](size_t i, int end, const double line[2]) {
     const Tracer::Trace & t = traces[slices[i]];
     const long            m = endOf(t, end);
     const double          tolerance = ArcSteps(DropTolerance * voxel, t.At(m), voxel, frame);
-    return std::abs(static_cast<double>(m) - line[0] - line[1] * static_cast<double>(i)) > tolerance;
+    return std::abs(static_cast<double>(m) - lineAt(line, i)) > tolerance;
   };
   // The line of (slice, end) over the middle traces: fitted robustly first (Theil and Sen:
   // the median of the slopes between every two traces, then the median offset), then by
@@ -344,8 +358,8 @@ DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
   {
     whole[i] = !traces[slices[i]].Empty() && !dropEnd(i, 0) && !dropEnd(i, 1) ? 1 : 0;
   }
-  const std::vector<Tracer::Trace> original = traces;
-  size_t                           dropped = 0;
+  // Only traces that are not whole change below: the guides stay as they were.
+  size_t dropped = 0;
   for (size_t i = 0; i < n; ++i)
   {
     Tracer::Trace & trace = traces[slices[i]];
@@ -360,27 +374,16 @@ DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
       {
         continue;
       }
-      const auto target = static_cast<long>(std::lround(lines[end][0] + lines[end][1] * static_cast<double>(i)));
+      const auto target = static_cast<long>(std::lround(lineAt(lines[end], i)));
       if ((end == 0 ? at - target : target - at) <= 0 || std::abs(target - at) > frame.Rays)
       {
         continue; // it runs on past its line, or lost more than a turn
       }
-      for (size_t d = 1; d < n; ++d)
+      const Tracer::Trace * guide =
+        NearestCovering(traces, slices, i, n, at, target, [&](size_t j) { return whole[j] != 0; });
+      if (guide != nullptr)
       {
-        const Tracer::Trace * guide = nullptr;
-        for (const size_t j : { i - d, i + d }) // i - d wraps past 0 to beyond n
-        {
-          if (j < n && whole[j] && original[slices[j]].Covers(at) && original[slices[j]].Covers(target))
-          {
-            guide = &original[slices[j]];
-            break;
-          }
-        }
-        if (guide != nullptr)
-        {
-          ContinueAlong(trace, *guide, end, endOf(*guide, end), frame);
-          break;
-        }
+        ContinueAlong(trace, *guide, end, endOf(*guide, end), frame);
       }
     }
     if (dropEnd(i, 0) || dropEnd(i, 1))
