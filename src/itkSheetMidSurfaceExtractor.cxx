@@ -227,6 +227,7 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
   const ProgressCallback again = [this](double) { return !m_Progress || m_Progress(1.0); };
   size_t                 fewest = first;
   long                   chosen = 0;
+  const double           middleSpan = SpanAlongAxis(mesh, m_Report);
   for (long candidate = 1; candidate < static_cast<long>(std::size(RollTracing::SeedFractions)); ++candidate)
   {
     SheetMidSurfaceReport    report;
@@ -245,12 +246,17 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
       }
       continue; // that seed slice does not trace: the first mesh stands
     }
-    if (report.Method == SheetSurfaceMethodEnum::Roll &&
-        PossibleLayerJumps(report) + std::max<size_t>(1, fewest / SeedCheckMargin) <= fewest &&
-        std::abs(report.SheetLength - m_Report.SheetLength) <= SeedExtentTolerance * m_Report.SheetLength &&
-        SpanAlongAxis(otherMesh, report) >= (1.0 - SeedExtentTolerance) * SpanAlongAxis(mesh, m_Report))
+    const size_t checks = PossibleLayerJumps(report);
+    const double span = SpanAlongAxis(otherMesh, report), chosenSpan = SpanAlongAxis(mesh, m_Report);
+    // Clearly fewer places named over as much of the sheet, or no more over clearly more of
+    // it (the chosen seed's trace lost slices along the axis that this one keeps).
+    const bool fewer = checks + std::max<size_t>(1, fewest / SeedCheckMargin) <= fewest &&
+                       span >= (1.0 - SeedExtentTolerance) * chosenSpan;
+    const bool longer = checks <= fewest && span > (1.0 + SeedExtentTolerance) * chosenSpan;
+    if (report.Method == SheetSurfaceMethodEnum::Roll && (fewer || longer) &&
+        std::abs(report.SheetLength - m_Report.SheetLength) <= SeedExtentTolerance * m_Report.SheetLength)
     {
-      fewest = PossibleLayerJumps(report);
+      fewest = checks;
       chosen = candidate;
       std::swap(mesh, otherMesh);
       std::swap(m_Report, report);
@@ -262,6 +268,10 @@ SheetMidSurfaceExtractor::Extract(const SheetVolumeView & volume)
     text << "traced from the seed slice at " << std::lround(100.0 * RollTracing::SeedFractions[chosen])
          << " % of the sheet's width along the axis instead of the middle one: its mesh's own checks name " << fewest
          << " possible layer jump(s), the middle one's " << first;
+    if (SpanAlongAxis(mesh, m_Report) > (1.0 + SeedExtentTolerance) * middleSpan)
+    {
+      text << "; it covers more of the sheet along the axis";
+    }
     m_Report.Warnings.push_back(text.str());
   }
   return mesh;

@@ -17,6 +17,7 @@
  *=========================================================================*/
 #include "vuRollTracer.h"
 #include "vuMedian.h"
+#include "vuPolyline.h"
 #include "vuSliceTracer.h"
 
 #include "itkMultiThreaderBase.h"
@@ -902,18 +903,35 @@ TraceRoll(const SheetVolumeView &             volume,
   Result              result;
   const size_t        nx = volume.Size[0], ny = volume.Size[1], nz = volume.Size[2];
   std::vector<size_t> material;
+  std::vector<double> amounts;
   for (size_t k = 0; k < nz; ++k)
   {
     const uint8_t * mask = volume.Mask + k * nx * ny;
-    if (std::any_of(mask, mask + nx * ny, [](uint8_t v) { return v != 0; }))
+    const auto      amount = std::count_if(mask, mask + nx * ny, [](uint8_t v) { return v != 0; });
+    if (amount > 0)
     {
       material.push_back(k);
+      amounts.push_back(static_cast<double>(amount));
     }
   }
   result.Slices.resize(nz);
   if (material.empty() || !(settings.SheetLevel > settings.AirLevel))
   {
     return result;
+  }
+  // The sheet's own slices: from the first to the last that holds at least SheetSliceShare of
+  // the fullest slices' material. Beyond the sheet's ends along the axis, slices may hold
+  // debris only (what is left of a streak or a ring artefact, or specks, once a tilted scan
+  // is resampled along the roll's axis), and they may be most of the slices with material.
+  const double sheetAmount = SheetSliceShare * SheetTracing::Percentile(amounts, 0.9);
+  long         sheetFirst = 0, sheetLast = static_cast<long>(material.size()) - 1;
+  while (sheetFirst < sheetLast && amounts[static_cast<size_t>(sheetFirst)] < sheetAmount)
+  {
+    ++sheetFirst;
+  }
+  while (sheetLast > sheetFirst && amounts[static_cast<size_t>(sheetLast)] < sheetAmount)
+  {
+    --sheetLast;
   }
   // Seed: a slice in the middle part of the sheet, traced on the mean profile of its
   // neighbours. Two turns that touch in the seed slice would carry its trace onto the next
@@ -1010,19 +1028,21 @@ TraceRoll(const SheetVolumeView &             volume,
   // its seed slice, so the traces kept must turn, at their median, at least half as often.
   // Nor is it a roll when the slices' traces, over every slice with material, find the sheet
   // on fewer than half of their steps (a trace that steps from page to page around a block
-  // of fused pages is carried across their ends and gaps).
+  // of fused pages is carried across their ends and gaps). Both over the sheet's own slices
+  // (debris beyond its ends along the axis holds no trace of it).
   std::vector<double> keptTurns;
   double              confirmed = 0.0;
-  for (size_t k : material)
+  for (long i = sheetFirst; i <= sheetLast; ++i)
   {
-    if (!result.Slices[k].Line.empty())
+    const SliceTrace & slice = result.Slices[material[static_cast<size_t>(i)]];
+    if (!slice.Line.empty())
     {
-      keptTurns.push_back(result.Slices[k].Turns);
-      confirmed += result.Slices[k].Confirmed;
+      keptTurns.push_back(slice.Turns);
+      confirmed += slice.Confirmed;
     }
   }
   result.Rolled = result.Rolled && !keptTurns.empty() && Median(keptTurns) >= KeptTurnsShare * turns &&
-                  confirmed >= RollConfirmedShare * static_cast<double>(material.size());
+                  confirmed >= RollConfirmedShare * static_cast<double>(sheetLast - sheetFirst + 1);
   progress(1.0);
   return result;
 }

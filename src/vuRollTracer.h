@@ -48,6 +48,10 @@ struct Settings
 /** Where the candidate seed slices lie, as fractions of the sheet's width along the axis;
  * the first is preferred. */
 constexpr double SeedFractions[] = { 0.5, 0.3, 0.7 };
+/** Least material of a slice of the sheet itself, as a share of the fullest slices' (the 90th
+ * percentile of the slices with material); beyond the sheet's ends along the axis a slice
+ * may hold debris only. */
+constexpr double SheetSliceShare = 0.5;
 
 /** The trace of one slice. */
 struct SliceTrace

@@ -337,18 +337,33 @@ void
 Extraction::SelectSlices()
 {
   lengths.assign(nz, 0.0);
-  std::vector<double> traced;
+  std::vector<double> tracedAreas;
   for (size_t k = 0; k < nz; ++k)
   {
     if (PolylineSize(traces[k]) >= 2)
     {
       lengths[k] = ArcLength(traces[k]);
-      traced.push_back(lengths[k]);
+      tracedAreas.push_back(area[k]);
     }
   }
-  if (traced.empty())
+  if (tracedAreas.empty())
   {
     itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: no slice of the mask could be traced as a sheet");
+  }
+  // The sheet's own slices hold at least half as much material as the fullest ones; slices
+  // beyond its ends along the axis may hold debris only (what is left of a streak or a ring
+  // artefact, or specks, once a tilted scan is resampled along the roll's axis), traced as
+  // short pieces, and they may be most of the traced slices: the reference length and area
+  // are the sheet slices' medians.
+  const double        sheetSliceArea = RollTracing::SheetSliceShare * Percentile(tracedAreas, 0.9);
+  std::vector<double> traced, areas;
+  for (size_t k = 0; k < nz; ++k)
+  {
+    if (lengths[k] > 0.0 && area[k] >= sheetSliceArea)
+    {
+      traced.push_back(lengths[k]);
+      areas.push_back(area[k]);
+    }
   }
   referenceLength = Median(traced);
   if (referenceLength < 2.0 * voxel)
@@ -377,14 +392,6 @@ Extraction::SelectSlices()
   }
   // A slice that cuts the sheet's edge along the axis holds only part of it (blurred, half
   // as bright): its trace is neither the sheet's middle nor its texture.
-  std::vector<double> areas;
-  for (size_t k = 0; k < nz; ++k)
-  {
-    if (lengths[k] > 0.0)
-    {
-      areas.push_back(area[k]);
-    }
-  }
   partialArea = 0.75 * Median(areas);
   good.assign(nz, 0);
   SelectGood(0.05 * referenceLength + 3.0 * voxel);

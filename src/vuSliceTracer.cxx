@@ -197,8 +197,11 @@ Tracer::NearestCrossing(const std::vector<Crossing> & list,
                         double                        bump,
                         double                        ahead,
                         double                        side,
-                        double &                      sheet) const
+                        bool                          pressable,
+                        double &                      sheet,
+                        bool &                        pressed) const
 {
+  pressed = false;
   const double voxel = m_Settings.Voxel;
   const auto   it =
     std::lower_bound(list.begin(), list.end(), target, [](const Crossing & c, double r) { return c.Radius < r; });
@@ -237,6 +240,29 @@ Tracer::NearestCrossing(const std::vector<Crossing> & list,
   const double     apart = Apart();
   const Crossing & crossing = list[best];
   sheet = crossing.SheetNear(target);
+  if (pressable && crossing.Band() && bestDistance >= window && std::abs(sheet - target) < window &&
+      crossing.Outer - crossing.Inner < PressedSeparation * m_Pitch)
+  {
+    // Where this turn is pressed onto the turn before or the next one, the band's middle
+    // lies between the two turns, further from the prediction than the window although
+    // the band's sheet on this turn's side lies on it; the step would be refused and the
+    // prediction held, unconfirmed, off the sheet along the whole touch. The band's sheet
+    // is taken when its other sheet is that neighbouring turn (not where a tight curl or
+    // noise widens one sheet into a band: its other sheet lies on no known turn) and the
+    // sheet taken lies nearer this turn's prediction than that turn (not the neighbouring
+    // turn's own band, where a turn converges on the next one). Two turns pressed together
+    // lie about a sheet's thickness apart; two turns blurred into one crossing, a whole
+    // turn spacing: only bands narrower than PressedSeparation of it.
+    const double other = sheet == crossing.Inner ? crossing.Outer : crossing.Inner;
+    const auto   on = [&](double r) {
+      return std::isfinite(r) && std::abs(other - r) < window && std::abs(sheet - target) < std::abs(sheet - r);
+    };
+    if (on(below) || on(bump) || on(ahead))
+    {
+      pressed = true;
+      bestDistance = std::abs(sheet - target);
+    }
+  }
   if (m_WidthMeasured && !crossing.Band() &&
       (crossing.Width > SharedWidth * m_Width || crossing.Mass > SharedMass * m_Mass))
   {
@@ -376,6 +402,10 @@ Tracer::Follow(const SliceCrossings &    crossings,
   double &          slope = model.Slope;
   double &          offset = model.Offset;
   double            missedArc = 0.0, heldArc = 0.0;
+  // Length of the run of steps taken along a band as a turn pressed onto its neighbour: a
+  // touch is short, a tight stretch of an uneven roll is not (no more than pressedLimit).
+  double       pressedArc = 0.0;
+  const double pressedLimit = std::max(30.0 * voxel, 2.0 * m_Pitch);
   // A held stretch (material but no separate crossing: touching turns) may be long where
   // the neighbouring slice vouches for it, short where it does not.
   const double heldWithPrior = std::max(30.0 * voxel, 2.0 * m_Pitch);
@@ -427,6 +457,8 @@ Tracer::Follow(const SliceCrossings &    crossings,
     const double x = centre[0] + predicted * std::cos(static_cast<double>(m) * m_Frame.Step);
     const double y = centre[1] + predicted * std::sin(static_cast<double>(m) * m_Frame.Step);
     const bool   outside = slice.NearEdge(x, y, EdgeReach * voxel);
+    // Near the edge of the data a band's sheets may be a turn and its cut end: no touch.
+    const bool pressable = !slice.NearEdge(x, y, PressedEdgeReach * voxel);
     // No material lies beyond the frame's reach within the scan's data; outside it (a roll
     // cut by the field of view, or within EdgeReach of where the data ends) the turn is
     // carried on, as below.
@@ -451,8 +483,18 @@ Tracer::Follow(const SliceCrossings &    crossings,
     const double side = turnKnown ? turnOffset : std::isfinite(ahead) && std::isfinite(below) ? ahead - below : 0.0;
     // The crossing accepted near a prediction (NearestCrossing), and the radius of its sheet.
     double sheet = 0.0;
+    bool   pressed = false;
     auto   accept = [&](double target) {
-      return NearestCrossing(list, target, guided ? prior : nullptr, m, lastCarried, below, bump, ahead, side, sheet);
+      return NearestCrossing(
+        list, target, guided ? prior : nullptr, m, lastCarried, below, bump, ahead, side, pressable, sheet, pressed);
+    };
+    // A step onto a turn pushed onto its neighbour: it follows the touch but leaves the
+    // turn's shape and its distances alone (a touch is a bump, not the turn's course).
+    const auto followBump = [&](double r) {
+      steps.push_back({ m, r, true });
+      radiusAt.back() = predicted;
+      bumpAt.back() = r;
+      missedArc = heldArc = 0.0;
     };
     size_t best = accept(predicted);
     if (best == list.size() && !guided && turnKnown && std::isfinite(below))
@@ -460,13 +502,17 @@ Tracer::Follow(const SliceCrossings &    crossings,
       // The distance to the turn before changes (uneven winding): continue the radius.
       best = accept(last.Rho + slope * static_cast<double>(m - last.M));
     }
+    if (pressed && pressedArc > pressedLimit)
+    {
+      best = list.size();
+      pressed = false;
+    }
     if (best == list.size() && !outside && turnKnown && std::isfinite(below))
     {
       // Where a turn is pushed onto its neighbour (a touch) it leaves the prediction, and
       // no crossing is near it; the turn is then the crossing between the turn before and
       // the next turn, where the next turn is the crossing after it and lies where the
-      // next turn is expected. The step follows it but leaves the turn's shape and its
-      // distances alone (a touch is a bump, not the turn's course).
+      // next turn is expected.
       const double nextTurn = guided && prior->Covers(m + dir * m_Frame.Rays)
                                 ? prior->At(m + dir * m_Frame.Rays) + offset
                                 : predicted + turnOffset;
@@ -474,12 +520,15 @@ Tracer::Follow(const SliceCrossings &    crossings,
       const double between = Between(list, from, nextTurn, std::abs(turnOffset));
       if (std::isfinite(between))
       {
-        steps.push_back({ m, between, true });
-        radiusAt.back() = predicted;
-        bumpAt.back() = between;
-        missedArc = heldArc = 0.0;
+        followBump(between);
         continue;
       }
+    }
+    if (best < list.size() && pressed)
+    {
+      followBump(sheet);
+      pressedArc += sheet * m_Frame.Step;
+      continue;
     }
     if (best < list.size())
     {
@@ -487,7 +536,7 @@ Tracer::Follow(const SliceCrossings &    crossings,
       steps.push_back({ m, r, true });
       confirmed.push_back({ m, r, true });
       radiusAt.back() = r;
-      missedArc = heldArc = 0.0;
+      missedArc = heldArc = pressedArc = 0.0;
       Learn(model, confirmed, r, far, below, guided ? prior : nullptr);
       continue;
     }
@@ -634,7 +683,9 @@ Tracer::TraceNear(const SliceCrossings & crossings, size_t slice, const Trace & 
       spacing = spacing > 0.0 ? spacing : m_Pitch;
       for (const Crossing & c : crossings.Rays[a])
       {
-        if (std::abs(c.Radius - rho) < 0.3 * spacing)
+        // Not from a band of touching turns: its middle lies between them, and the trace
+        // would keep it, off the sheet, as its first step (and the next slice's trace too).
+        if (!c.Band() && std::abs(c.Radius - rho) < 0.3 * spacing)
         {
           return TraceFrom(crossings, slice, &prior, m, c.Radius);
         }

@@ -74,6 +74,13 @@ constexpr double CarriedDistance = 0.6;
 // into a stretch just inside the margin where its crossing is not found, and the trace
 // would stop there, with every turn after it lost.
 constexpr double EdgeReach = 3.0;
+// Voxels within which the edge of the data is too near for a band to be taken as a turn
+// pressed onto its neighbour (NearestCrossing): where the edge cuts a turn, the cut end
+// and the turn beside it form a band.
+constexpr double PressedEdgeReach = 3.0 * EdgeReach;
+// Largest separation of a band's two sheets, as a share of the turn spacing, for the band
+// to be taken as a turn pressed onto its neighbour.
+constexpr double PressedSeparation = 0.5;
 
 // Least-squares line y = intercept + slope x through the points added.
 struct LineFit
@@ -371,6 +378,11 @@ public:
   // a band of two sheets whose sheet nearest the target is the turn before: its other sheet,
   // when it lies beyond the turn before on this turn's `side` of it (> 0 outwards, < 0
   // inwards, 0 unknown)).
+  // `pressed`: the crossing is a band whose middle lies further from the target than the
+  // window, but whose sheet nearest the target lies within it and whose other sheet is the
+  // turn before (`below`, or its `bump`) or the next turn: this turn pressed onto a
+  // neighbouring one (only where `pressable`, away from the edge of the data); the step
+  // follows the touch as a bump.
   size_t
   NearestCrossing(const std::vector<Crossing> & list,
                   double                        target,
@@ -381,7 +393,9 @@ public:
                   double                        bump,
                   double                        ahead,
                   double                        side,
-                  double &                      sheet) const;
+                  bool                          pressable,
+                  double &                      sheet,
+                  bool &                        pressed) const;
 
   // Updates what Follow() has learnt with a confirmed step at radius r: the distances to the
   // turns before (`below`, and `far`: two and three revolutions before; NaN where unknown),
