@@ -894,6 +894,12 @@ ExtendEnds(Polyline & line, const std::function<bool(double, double)> & inside, 
   }
 }
 
+double
+SheetSliceLeast(const std::vector<double> & amounts)
+{
+  return 0.5 * SheetTracing::Percentile(amounts, 0.9);
+}
+
 Result
 TraceRoll(const SheetVolumeView &             volume,
           const float *                       values,
@@ -919,11 +925,9 @@ TraceRoll(const SheetVolumeView &             volume,
   {
     return result;
   }
-  // The sheet's own slices: from the first to the last that holds at least SheetSliceShare of
-  // the fullest slices' material. Beyond the sheet's ends along the axis, slices may hold
-  // debris only (what is left of a streak or a ring artefact, or specks, once a tilted scan
-  // is resampled along the roll's axis), and they may be most of the slices with material.
-  const double sheetAmount = SheetSliceShare * SheetTracing::Percentile(amounts, 0.9);
+  // The sheet's own slices: from the first to the last that holds as much material as a
+  // slice of the sheet (SheetSliceLeast).
+  const double sheetAmount = SheetSliceLeast(amounts);
   long         sheetFirst = 0, sheetLast = static_cast<long>(material.size()) - 1;
   while (sheetFirst < sheetLast && amounts[static_cast<size_t>(sheetFirst)] < sheetAmount)
   {
@@ -1026,7 +1030,7 @@ TraceRoll(const SheetVolumeView &             volume,
   // pressed onto the next, a block of pages fused into one piece) while the slices keep no
   // trace of a roll, or keep only short arcs of one: a roll's slices turn about as often as
   // its seed slice, so the traces kept must turn, at their median, at least half as often.
-  // Nor is it a roll when the slices' traces, over every slice with material, find the sheet
+  // Nor is it a roll when the slices' traces, over every slice of the sheet, find the sheet
   // on fewer than half of their steps (a trace that steps from page to page around a block
   // of fused pages is carried across their ends and gaps). Both over the sheet's own slices
   // (debris beyond its ends along the axis holds no trace of it).

@@ -48,10 +48,13 @@ struct Settings
 /** Where the candidate seed slices lie, as fractions of the sheet's width along the axis;
  * the first is preferred. */
 constexpr double SeedFractions[] = { 0.5, 0.3, 0.7 };
-/** Least material of a slice of the sheet itself, as a share of the fullest slices' (the 90th
- * percentile of the slices with material); beyond the sheet's ends along the axis a slice
- * may hold debris only. */
-constexpr double SheetSliceShare = 0.5;
+/** The least material (voxels, or area) of a slice of the sheet itself, given the material of
+ * every slice that holds some: half the fullest slices' (their 90th percentile). Beyond the
+ * sheet's ends along the axis a slice may hold debris only (what is left of a streak or a ring
+ * artefact, or specks, once a tilted scan is resampled along the roll's axis), and such
+ * slices may be most of those with material. */
+double
+SheetSliceLeast(const std::vector<double> & amounts);
 
 /** The trace of one slice. */
 struct SliceTrace

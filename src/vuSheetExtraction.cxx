@@ -350,12 +350,9 @@ Extraction::SelectSlices()
   {
     itkGenericExceptionMacro(<< "SheetMidSurfaceExtractor: no slice of the mask could be traced as a sheet");
   }
-  // The sheet's own slices hold at least half as much material as the fullest ones; slices
-  // beyond its ends along the axis may hold debris only (what is left of a streak or a ring
-  // artefact, or specks, once a tilted scan is resampled along the roll's axis), traced as
-  // short pieces, and they may be most of the traced slices: the reference length and area
-  // are the sheet slices' medians.
-  const double        sheetSliceArea = RollTracing::SheetSliceShare * Percentile(tracedAreas, 0.9);
+  // The reference length and area are the medians of the sheet's own slices
+  // (SheetSliceLeast): debris beyond its ends along the axis is traced as short pieces.
+  const double        sheetSliceArea = RollTracing::SheetSliceLeast(tracedAreas);
   std::vector<double> traced, areas;
   for (size_t k = 0; k < nz; ++k)
   {

@@ -402,13 +402,13 @@ Tracer::Follow(const SliceCrossings &    crossings,
   double &          slope = model.Slope;
   double &          offset = model.Offset;
   double            missedArc = 0.0, heldArc = 0.0;
-  // Length of the run of steps taken along a band as a turn pressed onto its neighbour: a
-  // touch is short, a tight stretch of an uneven roll is not (no more than pressedLimit).
-  double       pressedArc = 0.0;
-  const double pressedLimit = std::max(30.0 * voxel, 2.0 * m_Pitch);
   // A held stretch (material but no separate crossing: touching turns) may be long where
   // the neighbouring slice vouches for it, short where it does not.
   const double heldWithPrior = std::max(30.0 * voxel, 2.0 * m_Pitch);
+  // Length of the run of steps taken along a band as a turn pressed onto its neighbour: a
+  // touch is short, a tight stretch of an uneven roll is not (no longer than a held stretch
+  // the neighbouring slice vouches for).
+  double       pressedArc = 0.0;
   const double heldAlone = std::max(4.0 * voxel, 1.0 * m_Pitch);
   const long   maximumSteps = m_Frame.Rays * (static_cast<long>(std::ceil(m_Frame.RMax / m_Pitch)) + 2);
   // Radius at every step taken so far (NaN where none was found): the turn traced one
@@ -502,7 +502,7 @@ Tracer::Follow(const SliceCrossings &    crossings,
       // The distance to the turn before changes (uneven winding): continue the radius.
       best = accept(last.Rho + slope * static_cast<double>(m - last.M));
     }
-    if (pressed && pressedArc > pressedLimit)
+    if (pressed && pressedArc > heldWithPrior)
     {
       best = list.size();
       pressed = false;
