@@ -246,6 +246,103 @@ MatchEndsToNeighbours(std::vector<Tracer::Trace> & traces,
     }
   }
 }
+
+// A trace ends at the last crossing it found, and in a noisy scan a crossing of noise lies
+// near the prediction now and then past the sheet's inner end: the trace runs on into the
+// roll's core, towards the next turn, and the slices traced after it are guided along the
+// same stretch. The sheet goes on along the roll axis and noise does not, so a trace's
+// inner end is cut back to where the slices SupportSlices away on one side or the other
+// (beyond the smoothing along the axis) hold material at its points, by at most a turn
+// spacing. Within EdgeReach of where the scan holds no data (a field of view that cuts the
+// sheet) the end is left as it is.
+constexpr long   SupportSlices[2] = { 3, 8 };
+constexpr double SupportRun = 1.5; // voxels of arc held in a row
+
+void
+TrimUnsupportedInnerEnds(std::vector<Tracer::Trace> & traces,
+                         const std::vector<size_t> &  slices,
+                         const Tracer &               tracer,
+                         const SheetVolumeView &      volume,
+                         const float *                values,
+                         const Settings &             settings)
+{
+  const PolarFrame & frame = tracer.Frame();
+  const double       voxel = settings.Voxel;
+  const double       material = settings.AirLevel + MaterialLevel * (settings.SheetLevel - settings.AirLevel);
+  const double       reach = std::max(tracer.Pitch(), 6.0 * voxel);
+  const auto         nz = static_cast<long>(volume.Size[2]);
+  for (size_t k : slices)
+  {
+    Tracer::Trace & trace = traces[k];
+    if (trace.Empty())
+    {
+      continue;
+    }
+    double centre[2];
+    tracer.Centre(k, centre);
+    const ValueSlice own(volume, values, k);
+    // Whether the slices on one side hold material at the point (the mean of their values).
+    auto supported = [&](double x, double y) {
+      for (long side : { -1L, 1L })
+      {
+        double sum = 0.0;
+        long   count = 0;
+        for (long d = SupportSlices[0]; d <= SupportSlices[1]; ++d)
+        {
+          const long other = static_cast<long>(k) + side * d;
+          if (other >= 0 && other < nz)
+          {
+            sum += ValueSlice(volume, values, static_cast<size_t>(other)).Value(x, y, settings.AirLevel);
+            ++count;
+          }
+        }
+        if (count > 0 && sum / static_cast<double>(count) >= material)
+        {
+          return true;
+        }
+      }
+      return false;
+    };
+    double arc = 0.0, run = 0.0;
+    long   runStart = trace.First, cutAt = trace.First;
+    bool   found = false;
+    for (long m = trace.First; m <= trace.Last() && arc <= reach + SupportRun * voxel; ++m)
+    {
+      const double rho = trace.At(m);
+      const double angle = static_cast<double>(m) * frame.Step;
+      const double x = centre[0] + rho * std::cos(angle), y = centre[1] + rho * std::sin(angle);
+      if (own.NearEdge(x, y, EdgeReach * voxel))
+      {
+        break;
+      }
+      const double stepArc = std::max(voxel, rho) * frame.Step;
+      arc += stepArc;
+      if (supported(x, y))
+      {
+        runStart = run == 0.0 ? m : runStart;
+        run += stepArc;
+        if (run >= SupportRun * voxel)
+        {
+          cutAt = runStart;
+          found = true;
+          break;
+        }
+      }
+      else
+      {
+        run = 0.0;
+      }
+    }
+    if (found && cutAt > trace.First && cutAt < trace.Last())
+    {
+      const auto cut = static_cast<std::ptrdiff_t>(cutAt - trace.First);
+      trace.Rho.erase(trace.Rho.begin(), trace.Rho.begin() + cut);
+      trace.Confirmed.erase(trace.Confirmed.begin(), trace.Confirmed.begin() + cut);
+      trace.First = cutAt;
+    }
+  }
+}
+
 // A sheet's cut edges run along the roll axis in a straight or slowly drifting line: the
 // ends of the traces, as functions of the slice, are fitted robustly by lines over the
 // middle 60 % of the slices, and a trace whose end lies further than DropTolerance of arc
@@ -993,6 +1090,7 @@ TraceRoll(const SheetVolumeView &             volume,
   };
   RunTogether({ [&]() { outwards(+1); }, [&]() { outwards(-1); } });
 
+  TrimUnsupportedInnerEnds(traces, material, tracer, volume, values, settings);
   MatchEndsToNeighbours(traces, material, tracer.Frame(), settings.Voxel);
   result.Incomplete = DropIncompleteTraces(traces, material, tracer, settings.Voxel, result.Continued);
 
