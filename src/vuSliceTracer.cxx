@@ -402,6 +402,10 @@ Tracer::Follow(const SliceCrossings &    crossings,
   double &          slope = model.Slope;
   double &          offset = model.Offset;
   double            missedArc = 0.0, heldArc = 0.0;
+  // Steps up to the last one on a crossing of the turn's own (not a band's sheet), and
+  // whether the follower, going inwards, stopped where no material lies ahead.
+  size_t ownEnd = 0;
+  bool   ranOut = false;
   // A held stretch (material but no separate crossing: touching turns) may be long where
   // the neighbouring slice vouches for it, short where it does not.
   const double heldWithPrior = std::max(30.0 * voxel, 2.0 * m_Pitch);
@@ -535,6 +539,7 @@ Tracer::Follow(const SliceCrossings &    crossings,
       const double r = sheet;
       steps.push_back({ m, r, true });
       confirmed.push_back({ m, r, true });
+      ownEnd = steps.size();
       radiusAt.back() = r;
       missedArc = heldArc = pressedArc = 0.0;
       Learn(model, confirmed, r, far, below, guided ? prior : nullptr);
@@ -571,9 +576,19 @@ Tracer::Follow(const SliceCrossings &    crossings,
       missedArc += predicted * m_Frame.Step;
       if (missedArc > 2.0 * voxel)
       {
+        ranOut = dir < 0;
         break;
       }
     }
+  }
+  // Where the sheet ran out towards the inner end (no material ahead: the roll's core), the
+  // trace ends at its last step on a crossing of its own: steps taken along a band past it
+  // (a pressed run that no crossing of the turn's own follows) carried the sheet's end on
+  // the next turn out. Elsewhere (a hold too long, a touch, the outer end) only the steps
+  // held through are dropped.
+  if (ranOut)
+  {
+    steps.resize(ownEnd);
   }
   while (!steps.empty() && !steps.back().Confirmed)
   {
