@@ -278,25 +278,30 @@ TrimUnsupportedInnerEnds(std::vector<Tracer::Trace> & traces,
     {
       continue;
     }
-    double centre[2];
-    tracer.Centre(k, centre);
     const ValueSlice own(volume, values, k);
-    // Whether the slices on one side hold material at the point (the mean of their values).
-    auto supported = [&](double x, double y) {
-      for (long side : { -1L, 1L })
+    // The slices SupportSlices away on either side, and whether those on one side hold
+    // material at a point (the mean of their values).
+    std::vector<ValueSlice> sides[2];
+    for (long d = SupportSlices[0]; d <= SupportSlices[1]; ++d)
+    {
+      for (int side = 0; side < 2; ++side)
+      {
+        const long other = static_cast<long>(k) + (side == 0 ? -d : d);
+        if (other >= 0 && other < nz)
+        {
+          sides[side].emplace_back(volume, values, static_cast<size_t>(other));
+        }
+      }
+    }
+    auto supported = [&](const double xy[2]) {
+      for (const auto & neighbours : sides)
       {
         double sum = 0.0;
-        long   count = 0;
-        for (long d = SupportSlices[0]; d <= SupportSlices[1]; ++d)
+        for (const ValueSlice & slice : neighbours)
         {
-          const long other = static_cast<long>(k) + side * d;
-          if (other >= 0 && other < nz)
-          {
-            sum += ValueSlice(volume, values, static_cast<size_t>(other)).Value(x, y, settings.AirLevel);
-            ++count;
-          }
+          sum += slice.Value(xy[0], xy[1], settings.AirLevel);
         }
-        if (count > 0 && sum / static_cast<double>(count) >= material)
+        if (!neighbours.empty() && sum / static_cast<double>(neighbours.size()) >= material)
         {
           return true;
         }
@@ -309,15 +314,15 @@ TrimUnsupportedInnerEnds(std::vector<Tracer::Trace> & traces,
     for (long m = trace.First; m <= trace.Last() && arc <= reach + SupportRun * voxel; ++m)
     {
       const double rho = trace.At(m);
-      const double angle = static_cast<double>(m) * frame.Step;
-      const double x = centre[0] + rho * std::cos(angle), y = centre[1] + rho * std::sin(angle);
-      if (own.NearEdge(x, y, EdgeReach * voxel))
+      double       xy[2];
+      tracer.PointAt(k, m, rho, xy);
+      if (own.NearEdge(xy[0], xy[1], EdgeReach * voxel))
       {
         break;
       }
       const double stepArc = std::max(voxel, rho) * frame.Step;
       arc += stepArc;
-      if (supported(x, y))
+      if (supported(xy))
       {
         runStart = run == 0.0 ? m : runStart;
         run += stepArc;

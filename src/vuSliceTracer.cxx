@@ -738,10 +738,18 @@ bool
 Tracer::NearDataEdge(size_t slice, long m, double rho, double reach) const
 {
   const ValueSlice sampler(m_Volume, m_Values, slice);
-  double           c[2];
-  Centre(slice, c);
+  double           xy[2];
+  PointAt(slice, m, rho, xy);
+  return sampler.NearEdge(xy[0], xy[1], reach);
+}
+
+void
+Tracer::PointAt(size_t slice, long m, double rho, double xy[2]) const
+{
+  Centre(slice, xy);
   const double angle = static_cast<double>(m) * m_Frame.Step;
-  return sampler.NearEdge(c[0] + rho * std::cos(angle), c[1] + rho * std::sin(angle), reach);
+  xy[0] += rho * std::cos(angle);
+  xy[1] += rho * std::sin(angle);
 }
 
 Polyline

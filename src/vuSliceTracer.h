@@ -498,6 +498,10 @@ public:
   bool
   NearDataEdge(size_t slice, long m, double rho, double reach) const;
 
+  // The point (mm, in the slice) at angular index m and radius rho about the slice's centre.
+  void
+  PointAt(size_t slice, long m, double rho, double xy[2]) const;
+
 private:
   const SheetVolumeView & m_Volume;
   const float *           m_Values;
