@@ -64,7 +64,7 @@ constexpr long AloneRays = 8;
 constexpr long DataMargin = 3;
 // A turn carried through a stretch out of the field of view keeps at least this fraction of
 // its learnt distance from the turn before.
-constexpr double CarriedDistance = 0.6;
+constexpr double CarriedDistance = 0.65;
 // Voxels beyond DataMargin within which the scan's data ends: a turn predicted there is
 // treated as out of the field of view (carried, not lost where its crossing is missing),
 // and a trace's end there is where the field of view cuts the sheet, not the sheet's end.
