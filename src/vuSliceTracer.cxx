@@ -168,6 +168,14 @@ struct Tracer::FollowModel
 };
 
 namespace {
+// The point at `angle` and radius `rho` about `centre` (mm, in the slice).
+void
+PointAbout(const double centre[2], double angle, double rho, double xy[2])
+{
+  xy[0] = centre[0] + rho * std::cos(angle);
+  xy[1] = centre[1] + rho * std::sin(angle);
+}
+
 // The radius of the turn one revolution before each of the first `rays` steps of a trace
 // from `start` in direction `dir`: the steps `opposite` already followed the other way from
 // the same start (NaN where they do not reach).
@@ -458,8 +466,9 @@ Tracer::Follow(const SliceCrossings &    crossings,
     {
       break;
     }
-    const double x = centre[0] + predicted * std::cos(static_cast<double>(m) * m_Frame.Step);
-    const double y = centre[1] + predicted * std::sin(static_cast<double>(m) * m_Frame.Step);
+    double xy[2];
+    PointAbout(centre, static_cast<double>(m) * m_Frame.Step, predicted, xy);
+    const double x = xy[0], y = xy[1];
     const bool   outside = slice.NearEdge(x, y, EdgeReach * voxel);
     // Near the edge of the data a band's sheets may be a turn and its cut end: no touch.
     const bool pressable = !slice.NearEdge(x, y, PressedEdgeReach * voxel);
@@ -746,10 +755,9 @@ Tracer::NearDataEdge(size_t slice, long m, double rho, double reach) const
 void
 Tracer::PointAt(size_t slice, long m, double rho, double xy[2]) const
 {
-  Centre(slice, xy);
-  const double angle = static_cast<double>(m) * m_Frame.Step;
-  xy[0] += rho * std::cos(angle);
-  xy[1] += rho * std::sin(angle);
+  double c[2];
+  Centre(slice, c);
+  PointAbout(c, static_cast<double>(m) * m_Frame.Step, rho, xy);
 }
 
 Polyline
@@ -769,9 +777,7 @@ Tracer::ToPolyline(const Trace & trace, size_t slice) const
       sum += trace.Rho[static_cast<size_t>(j)];
     }
     const double rho = sum / static_cast<double>(2 * h + 1);
-    const double angle = static_cast<double>(trace.First + i) * m_Frame.Step;
-    line[2 * i] = c[0] + rho * std::cos(angle);
-    line[2 * i + 1] = c[1] + rho * std::sin(angle);
+    PointAbout(c, static_cast<double>(trace.First + i) * m_Frame.Step, rho, &line[2 * i]);
   }
   return line;
 }
