@@ -141,14 +141,97 @@ Tracer::Between(const std::vector<Crossing> & list, double below, double next, d
 // slope per step.
 struct Tracer::FollowModel
 {
-  std::vector<double> Distances;
-  double              TurnOffset{ 0.0 };
-  bool                TurnKnown{ false };
-  std::vector<double> FarDistances[2];
-  double              FarOffset[2]{ 0.0, 0.0 };
-  bool                FarKnown[2]{ false, false };
-  double              Slope{ 0.0 };
-  double              Offset{ 0.0 };
+  // A distance to a turn before, learnt over the last eighth of a turn (at least a dozen
+  // steps) of confirmed steps: their median, so that a short stretch where two turns touch
+  // (one merged crossing between them) does not pull the next prediction onto the wrong
+  // turn. Either in millimetres or as a share of the turn before's radius, whichever
+  // explains those steps better. About an elliptic section's axis every turn's radius
+  // scales with the section's shape at that angle, and so does the distance between two
+  // turns (half as much again on the long axis of a roll squashed to 0.65): a distance in
+  // millimetres lags the shape and predicts the next turn in the gap before it where the
+  // section widens. About a centre off the spiral's own (a roll's inner turns, an irregular
+  // section) the distance stays and its share changes, so the share is taken only
+  // ScaledFromDistances distances from the centre and further out.
+  struct Learnt
+  {
+    std::vector<double> Distances, Radii; // per confirmed step: the distance, the turn before's radius
+    double              Absolute{ 0.0 };
+    double              Share{ 0.0 };
+    bool                Scaled{ false };
+
+    bool
+    Known() const
+    {
+      return Distances.size() >= 6;
+    }
+
+    // Recomputed every fourth step once there are more than 24.
+    void
+    Add(double distance, double radius, size_t window)
+    {
+      Distances.push_back(distance);
+      Radii.push_back(radius);
+      if (Distances.size() > 24 && Distances.size() % 4 != 0)
+      {
+        return;
+      }
+      const size_t        n = std::min(window, Distances.size());
+      const size_t        from = Distances.size() - n;
+      std::vector<double> shares(n);
+      for (size_t i = 0; i < n; ++i)
+      {
+        shares[i] = Distances[from + i] / Radii[from + i];
+      }
+      Absolute = Median(std::vector<double>(Distances.begin() + static_cast<std::ptrdiff_t>(from), Distances.end()));
+      Share = Median(shares);
+      double absoluteResidual = 0.0, scaledResidual = 0.0, meanRadius = 0.0;
+      for (size_t i = from; i < Distances.size(); ++i)
+      {
+        absoluteResidual += std::abs(Distances[i] - Absolute);
+        scaledResidual += std::abs(Distances[i] - Share * Radii[i]);
+        meanRadius += Radii[i] / static_cast<double>(n);
+      }
+      Scaled = scaledResidual < absoluteResidual && meanRadius >= ScaledFromDistances * std::abs(Absolute);
+    }
+
+    double
+    At(double radius) const
+    {
+      return Scaled ? Share * radius : Absolute;
+    }
+  };
+
+  Learnt Turn;
+  double TurnOffset{ 0.0 }; // the distance to the turn before at the current step
+  bool   TurnKnown{ false };
+  Learnt Far[2];
+  double FarOffset[2]{ 0.0, 0.0 };
+  bool   FarKnown[2]{ false, false };
+  double Slope{ 0.0 };
+  double Offset{ 0.0 };
+
+  // The distances at a step whose turns one, two and three revolutions before lie at
+  // `below` and `far` (NaN where unknown: the distances taken last are kept); turns lie at
+  // least `least` apart, however tightly they touch.
+  void
+  ScaleTo(double below, const double far[2], double least)
+  {
+    if (TurnKnown && std::isfinite(below) && below > 0.0)
+    {
+      TurnOffset = Turn.At(below);
+      if (std::abs(TurnOffset) < least)
+      {
+        TurnOffset = std::copysign(least, TurnOffset);
+      }
+    }
+    for (int j = 0; j < 2; ++j)
+    {
+      if (FarKnown[j] && std::isfinite(far[j]) && far[j] > 0.0)
+      {
+        FarOffset[j] = Far[j].At(far[j]);
+      }
+    }
+  }
 
   // The radius predicted from the turn before (`below`), or, once the turns two and three
   // before (`far`) are known, the median of the three predictions: where the turn before
@@ -323,44 +406,24 @@ Tracer::Learn(FollowModel &             model,
               double                    below,
               const Trace *             guide) const
 {
-  const double voxel = m_Settings.Voxel;
   const double maximumSlope = 0.05 * m_Pitch;
-  // The median of the last eighth of a turn of `values` (at least 12), recomputed every
-  // fourth value once there are more than 24; `current` in between.
-  auto median = [&](std::vector<double> & values, double current) {
-    const size_t window = std::max<size_t>(12, static_cast<size_t>(m_Frame.Rays / 8));
-    if (values.size() > 24 && values.size() % 4 != 0)
-    {
-      return current;
-    }
-    return Median(
-      std::vector<double>(values.end() - static_cast<std::ptrdiff_t>(std::min(window, values.size())), values.end()));
-  };
+  // The distances to the turns before, over the last eighth of a turn (at least 12 steps).
+  const size_t window = std::max<size_t>(12, static_cast<size_t>(m_Frame.Rays / 8));
   const size_t count = std::min<size_t>(12, confirmed.size());
-  // Distance to the turn before: the median over the last eighth of a turn of
-  // confirmed steps, so that a short stretch where two turns touch (one merged
-  // crossing between them) does not pull the next prediction onto the wrong turn.
   for (int j = 0; j < 2; ++j)
   {
-    if (std::isfinite(far[j]))
+    if (std::isfinite(far[j]) && far[j] > 0.0)
     {
-      model.FarDistances[j].push_back(r - far[j]);
-      model.FarOffset[j] = median(model.FarDistances[j], model.FarOffset[j]);
-      model.FarKnown[j] = model.FarDistances[j].size() >= 6;
+      model.Far[j].Add(r - far[j], far[j], window);
+      model.FarKnown[j] = model.Far[j].Known();
     }
   }
-  if (std::isfinite(below))
+  if (std::isfinite(below) && below > 0.0)
   {
-    model.Distances.push_back(r - below);
-    model.TurnOffset = median(model.Distances, model.TurnOffset);
-    model.TurnKnown = model.Distances.size() >= 6;
-    // Turns lie at least a sheet apart, however tightly they touch.
-    const double least = 0.8 * std::max(m_Width, voxel);
-    if (model.TurnKnown && std::abs(model.TurnOffset) < least)
-    {
-      model.TurnOffset = std::copysign(least, model.TurnOffset);
-    }
+    model.Turn.Add(r - below, below, window);
+    model.TurnKnown = model.Turn.Known();
   }
+  model.ScaleTo(below, far, LeastTurnDistance());
   if (guide != nullptr)
   {
     // Mean offset from the prior over the last confirmed steps it covers.
@@ -459,6 +522,7 @@ Tracer::Follow(const SliceCrossings &    crossings,
     const bool   guided = prior != nullptr && prior->Covers(m);
     const double below = turnBefore(step);
     const double far[2] = { turnsBefore(step, 2), turnsBefore(step, 3) };
+    model.ScaleTo(below, far, LeastTurnDistance());
     const double predicted = guided                              ? prior->At(m) + offset
                              : turnKnown && std::isfinite(below) ? model.FromTurns(below, far)
                                                                  : last.Rho + slope * static_cast<double>(m - last.M);

@@ -65,6 +65,10 @@ constexpr long DataMargin = 3;
 // A turn carried through a stretch out of the field of view keeps at least this fraction of
 // its learnt distance from the turn before.
 constexpr double CarriedDistance = 0.65;
+// A distance to a turn before is learnt as a share of that turn's radius (where that explains
+// the steps better) only this many such distances from the slice's centre and further out;
+// nearer it, a centre a few voxels off the spiral's own makes the share swing.
+constexpr double ScaledFromDistances = 6.0;
 // Voxels beyond DataMargin within which the scan's data ends: a turn predicted there is
 // treated as out of the field of view (carried, not lost where its crossing is missing),
 // and a trace's end there is where the field of view cuts the sheet, not the sheet's end.
@@ -468,6 +472,14 @@ public:
   Apart() const
   {
     return 0.6 * std::max(m_Width, m_Settings.Voxel);
+  }
+
+  // Least distance a follower learns between a turn and the turn before: a sheet's
+  // thickness, however tightly they touch.
+  double
+  LeastTurnDistance() const
+  {
+    return 0.8 * std::max(m_Width, m_Settings.Voxel);
   }
 
   // Median spacing of successive crossings and median crossing width.
