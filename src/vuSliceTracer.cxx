@@ -158,6 +158,7 @@ struct Tracer::FollowModel
     double              Absolute{ 0.0 };
     double              Share{ 0.0 };
     bool                Scaled{ false };
+    std::vector<double> Scratch; // the window's values, reused from one recomputation to the next
 
     bool
     Known() const
@@ -175,23 +176,41 @@ struct Tracer::FollowModel
       {
         return;
       }
-      const size_t        n = std::min(window, Distances.size());
-      const size_t        from = Distances.size() - n;
-      std::vector<double> shares(n);
+      const size_t n = std::min(window, Distances.size());
+      const size_t from = Distances.size() - n;
+      Scratch.assign(Distances.begin() + static_cast<std::ptrdiff_t>(from), Distances.end());
+      Absolute = MedianOfScratch();
+      double meanRadius = 0.0;
+      for (size_t i = from; i < Distances.size(); ++i)
+      {
+        meanRadius += Radii[i] / static_cast<double>(n);
+      }
+      Scaled = false;
+      if (meanRadius < ScaledFromDistances * std::abs(Absolute))
+      {
+        return;
+      }
       for (size_t i = 0; i < n; ++i)
       {
-        shares[i] = Distances[from + i] / Radii[from + i];
+        Scratch[i] = Distances[from + i] / Radii[from + i];
       }
-      Absolute = Median(std::vector<double>(Distances.begin() + static_cast<std::ptrdiff_t>(from), Distances.end()));
-      Share = Median(shares);
-      double absoluteResidual = 0.0, scaledResidual = 0.0, meanRadius = 0.0;
+      Share = MedianOfScratch();
+      double absoluteResidual = 0.0, scaledResidual = 0.0;
       for (size_t i = from; i < Distances.size(); ++i)
       {
         absoluteResidual += std::abs(Distances[i] - Absolute);
         scaledResidual += std::abs(Distances[i] - Share * Radii[i]);
-        meanRadius += Radii[i] / static_cast<double>(n);
       }
-      Scaled = scaledResidual < absoluteResidual && meanRadius >= ScaledFromDistances * std::abs(Absolute);
+      Scaled = scaledResidual < absoluteResidual;
+    }
+
+    // The median of Scratch (reordered), as Median() gives it, without a copy.
+    double
+    MedianOfScratch()
+    {
+      const auto middle = Scratch.begin() + static_cast<std::ptrdiff_t>(Scratch.size() / 2);
+      std::nth_element(Scratch.begin(), middle, Scratch.end());
+      return *middle;
     }
 
     double
