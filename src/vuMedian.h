@@ -24,9 +24,10 @@
 
 namespace itk {
 namespace RollTracing {
-/** The median of the values (the upper one of an even count; 0 when there are none). */
+/** The median of the values (the upper one of an even count; 0 when there are none),
+ * reordering them in place: no copy, for a buffer reused from one call to the next. */
 inline double
-Median(std::vector<double> values)
+MedianInPlace(std::vector<double> & values)
 {
   if (values.empty())
   {
@@ -35,6 +36,13 @@ Median(std::vector<double> values)
   const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
   std::nth_element(values.begin(), middle, values.end());
   return *middle;
+}
+
+/** The median of the values (the upper one of an even count; 0 when there are none). */
+inline double
+Median(std::vector<double> values)
+{
+  return MedianInPlace(values);
 }
 
 /** The median of the values within `half` entries of each (fewer at the ends): a curve's

@@ -179,7 +179,7 @@ struct Tracer::FollowModel
       const size_t n = std::min(window, Distances.size());
       const size_t from = Distances.size() - n;
       Scratch.assign(Distances.begin() + static_cast<std::ptrdiff_t>(from), Distances.end());
-      Absolute = MedianOfScratch();
+      Absolute = MedianInPlace(Scratch);
       double meanRadius = 0.0;
       for (size_t i = from; i < Distances.size(); ++i)
       {
@@ -194,7 +194,7 @@ struct Tracer::FollowModel
       {
         Scratch[i] = Distances[from + i] / Radii[from + i];
       }
-      Share = MedianOfScratch();
+      Share = MedianInPlace(Scratch);
       double absoluteResidual = 0.0, scaledResidual = 0.0;
       for (size_t i = from; i < Distances.size(); ++i)
       {
@@ -202,15 +202,6 @@ struct Tracer::FollowModel
         scaledResidual += std::abs(Distances[i] - Share * Radii[i]);
       }
       Scaled = scaledResidual < absoluteResidual;
-    }
-
-    // The median of Scratch (reordered), as Median() gives it, without a copy.
-    double
-    MedianOfScratch()
-    {
-      const auto middle = Scratch.begin() + static_cast<std::ptrdiff_t>(Scratch.size() / 2);
-      std::nth_element(Scratch.begin(), middle, Scratch.end());
-      return *middle;
     }
 
     double
@@ -222,10 +213,8 @@ struct Tracer::FollowModel
 
   Learnt Turn;
   double TurnOffset{ 0.0 }; // the distance to the turn before at the current step
-  bool   TurnKnown{ false };
   Learnt Far[2];
   double FarOffset[2]{ 0.0, 0.0 };
-  bool   FarKnown[2]{ false, false };
   double Slope{ 0.0 };
   double Offset{ 0.0 };
 
@@ -235,7 +224,7 @@ struct Tracer::FollowModel
   void
   ScaleTo(double below, const double far[2], double least)
   {
-    if (TurnKnown && std::isfinite(below) && below > 0.0)
+    if (Turn.Known() && std::isfinite(below) && below > 0.0)
     {
       TurnOffset = Turn.At(below);
       if (std::abs(TurnOffset) < least)
@@ -245,7 +234,7 @@ struct Tracer::FollowModel
     }
     for (int j = 0; j < 2; ++j)
     {
-      if (FarKnown[j] && std::isfinite(far[j]) && far[j] > 0.0)
+      if (Far[j].Known() && std::isfinite(far[j]) && far[j] > 0.0)
       {
         FarOffset[j] = Far[j].At(far[j]);
       }
@@ -260,7 +249,7 @@ struct Tracer::FollowModel
   FromTurns(double below, const double far[2]) const
   {
     const double fromTurn = below + TurnOffset;
-    if (FarKnown[0] && FarKnown[1] && std::isfinite(far[0]) && std::isfinite(far[1]))
+    if (Far[0].Known() && Far[1].Known() && std::isfinite(far[0]) && std::isfinite(far[1]))
     {
       std::vector<double> three{ fromTurn, far[0] + FarOffset[0], far[1] + FarOffset[1] };
       return Median(three);
@@ -434,14 +423,14 @@ Tracer::Learn(FollowModel &             model,
     if (std::isfinite(far[j]) && far[j] > 0.0)
     {
       model.Far[j].Add(r - far[j], far[j], window);
-      model.FarKnown[j] = model.Far[j].Known();
     }
   }
   if (std::isfinite(below) && below > 0.0)
   {
     model.Turn.Add(r - below, below, window);
-    model.TurnKnown = model.Turn.Known();
   }
+  // The distances just learnt, at this step's turns before: the next step scales them to its
+  // own, and keeps these where it has none (a turn before not traced there).
   model.ScaleTo(below, far, LeastTurnDistance());
   if (guide != nullptr)
   {
@@ -522,7 +511,6 @@ Tracer::Follow(const SliceCrossings &    crossings,
                                                : std::numeric_limits<double>::quiet_NaN();
   };
   double & turnOffset = model.TurnOffset;
-  bool &   turnKnown = model.TurnKnown;
   // The turns two and three revolutions before, each with its own distance to this one:
   // where the turn before bulges onto this one (a touch), it alone would carry the bulge
   // outwards onto the next turn; the median of the three predictions does not.
@@ -542,6 +530,7 @@ Tracer::Follow(const SliceCrossings &    crossings,
     const double below = turnBefore(step);
     const double far[2] = { turnsBefore(step, 2), turnsBefore(step, 3) };
     model.ScaleTo(below, far, LeastTurnDistance());
+    const bool   turnKnown = model.Turn.Known();
     const double predicted = guided                              ? prior->At(m) + offset
                              : turnKnown && std::isfinite(below) ? model.FromTurns(below, far)
                                                                  : last.Rho + slope * static_cast<double>(m - last.M);
