@@ -519,12 +519,6 @@ FirstDisagreement(const Tracer::Trace & a, const Tracer::Trace & b, double pitch
   return -1;
 }
 
-// Whether every place where two traces differ by more than half the turn spacing, the
-// first at `first` (FirstDisagreement), lies in one stretch shorter than `longest` angular
-// steps, with the traces agreeing for at least as long on both sides of it: a touch that
-// begins or ends between the two slices (one turn pushed onto the next over a short arc in
-// one slice and not in the other), not a trace that lost its turn, which stays off it from
-// there on.
 // Last angular index at which two traces differ by more than half the turn spacing, given
 // the first (FirstDisagreement, >= 0): scanned back from the end of their overlap.
 long
@@ -538,6 +532,12 @@ LastDisagreement(const Tracer::Trace & a, const Tracer::Trace & b, double pitch,
   return last;
 }
 
+// Whether every place where two traces differ by more than half the turn spacing, the
+// first at `first` (FirstDisagreement), lies in one stretch shorter than `longest` angular
+// steps, with the traces agreeing for at least as long on both sides of it: a touch that
+// begins or ends between the two slices (one turn pushed onto the next over a short arc in
+// one slice and not in the other), not a trace that lost its turn, which stays off it from
+// there on.
 bool
 DisagreeLocally(const Tracer::Trace & a, const Tracer::Trace & b, double pitch, long first, long longest)
 {
@@ -891,6 +891,34 @@ CarryShortEnds(const Tracer::Trace & trace,
   return next;
 }
 
+// Traces dropped for disagreeing with their prior are given back where the next trace kept
+// vouches for them. A touch that begins between two slices moves a turn by half a spacing
+// and more; the prior may be carried beyond its trace's ends on the slice before's curve
+// (CarryShortEnds). The slices after either disagree with it and are dropped, until one is
+// kept (it agrees again, or it disagrees as well and is kept all the same:
+// MaximumRejected). Those dropped that agree with it (nowhere or only locally apart), each
+// with the next one given back, from the nearest on, are given back: interpolated across
+// the touch instead, they would lie between its turns.
+void
+GiveBackAgreeing(std::vector<std::pair<size_t, Tracer::Trace>> & dropped,
+                 const Tracer::Trace &                           kept,
+                 double                                          pitch,
+                 long                                            longest,
+                 std::vector<Tracer::Trace> &                    traces)
+{
+  const Tracer::Trace * after = &kept;
+  for (auto it = dropped.rbegin(); it != dropped.rend(); ++it)
+  {
+    const long off = FirstDisagreement(*after, it->second, pitch);
+    if (off >= 0 && !DisagreeLocally(*after, it->second, pitch, off, longest))
+    {
+      break;
+    }
+    traces[it->first] = std::move(it->second);
+    after = &traces[it->first];
+  }
+}
+
 // Every slice from the seed outwards in direction `dir` (+1 or -1), each traced with the
 // previous slice's trace as prior (CarryShortEnds); the crossings of a batch of slices
 // found in parallel. `done` counts the slices traced; `report` is called after each batch.
@@ -909,6 +937,8 @@ TraceOutwards(const Tracer &                tracer,
   Tracer::Trace prior = seedTrace;
   long          rejected = 0;
   long          carried[2] = { 0, 0 };
+  // The traces dropped since the last one kept, in the order traced.
+  std::vector<std::pair<size_t, Tracer::Trace>> dropped;
   for (long q = dir > 0 ? seedIndex : seedIndex - 1; q >= 0 && q < static_cast<long>(material.size());)
   {
     std::vector<size_t> slices;
@@ -938,11 +968,14 @@ TraceOutwards(const Tracer &                tracer,
       if (off >= 0 && rejected < MaximumRejected &&
           !DisagreeLocally(prior, traces[slices[i]], tracer.Pitch(), off, tracer.Frame().Rays / 8))
       {
+        dropped.emplace_back(slices[i], std::move(traces[slices[i]]));
         traces[slices[i]] = Tracer::Trace{};
         ++rejected;
         continue;
       }
       rejected = 0;
+      GiveBackAgreeing(dropped, traces[slices[i]], tracer.Pitch(), tracer.Frame().Rays / 8, traces);
+      dropped.clear();
       prior = CarryShortEnds(traces[slices[i]], prior, carried, tracer.Frame(), voxel);
     }
     q += dir * static_cast<long>(slices.size());
