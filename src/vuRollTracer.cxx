@@ -898,7 +898,9 @@ CarryShortEnds(const Tracer::Trace & trace,
 // kept (it agrees again, or it disagrees as well and is kept all the same:
 // MaximumRejected). Those dropped that agree with it (nowhere or only locally apart), each
 // with the next one given back, from the nearest on, are given back: interpolated across
-// the touch instead, they would lie between its turns.
+// the touch instead, they would lie between its turns. A dropped trace that stops short of
+// the next one's end by more than `longest` angular steps is not: it lost its turn before
+// its end, and where it agrees with the next one says nothing of where it did not.
 void
 GiveBackAgreeing(std::vector<std::pair<size_t, Tracer::Trace>> & dropped,
                  const Tracer::Trace &                           kept,
@@ -909,8 +911,13 @@ GiveBackAgreeing(std::vector<std::pair<size_t, Tracer::Trace>> & dropped,
   const Tracer::Trace * after = &kept;
   for (auto it = dropped.rbegin(); it != dropped.rend(); ++it)
   {
-    const long off = FirstDisagreement(*after, it->second, pitch);
-    if (off >= 0 && !DisagreeLocally(*after, it->second, pitch, off, longest))
+    const Tracer::Trace & trace = it->second;
+    if (trace.First > after->First + longest || trace.Last() < after->Last() - longest)
+    {
+      break;
+    }
+    const long off = FirstDisagreement(*after, trace, pitch);
+    if (off >= 0 && !DisagreeLocally(*after, trace, pitch, off, longest))
     {
       break;
     }
