@@ -503,7 +503,7 @@ DropIncompleteTraces(std::vector<Tracer::Trace> & traces,
 }
 
 // Slices in a row whose traces may be dropped for disagreeing with the last kept one.
-constexpr long MaximumRejected = 8;
+constexpr size_t MaximumRejected = 8;
 
 // First angular index at which two traces differ by more than half the turn spacing (-1: none).
 long
@@ -544,6 +544,15 @@ DisagreeLocally(const Tracer::Trace & a, const Tracer::Trace & b, double pitch, 
   const long from = std::max(a.First, b.First), to = std::min(a.Last(), b.Last());
   const long last = LastDisagreement(a, b, pitch, first);
   return last - first < longest && first - from >= longest && to - last >= longest;
+}
+
+// Whether two traces differ by more than half the turn spacing nowhere, or only locally
+// (DisagreeLocally).
+bool
+AgreeLocally(const Tracer::Trace & a, const Tracer::Trace & b, double pitch, long longest)
+{
+  const long first = FirstDisagreement(a, b, pitch);
+  return first < 0 || DisagreeLocally(a, b, pitch, first, longest);
 }
 
 // The part of `trace` that stays within half a turn spacing of `prior`: all of it where it
@@ -916,8 +925,7 @@ GiveBackAgreeing(std::vector<std::pair<size_t, Tracer::Trace>> & dropped,
     {
       break;
     }
-    const long off = FirstDisagreement(*after, trace, pitch);
-    if (off >= 0 && !DisagreeLocally(*after, trace, pitch, off, longest))
+    if (!AgreeLocally(*after, trace, pitch, longest))
     {
       break;
     }
@@ -942,8 +950,8 @@ TraceOutwards(const Tracer &                tracer,
 {
   const size_t  batch = 16;
   Tracer::Trace prior = seedTrace;
-  long          rejected = 0;
   long          carried[2] = { 0, 0 };
+  const long    longest = tracer.Frame().Rays / 8;
   // The traces dropped since the last one kept, in the order traced.
   std::vector<std::pair<size_t, Tracer::Trace>> dropped;
   for (long q = dir > 0 ? seedIndex : seedIndex - 1; q >= 0 && q < static_cast<long>(material.size());)
@@ -971,17 +979,13 @@ TraceOutwards(const Tracer &                tracer,
       // a turn (noise, a streak, a faint stretch): it is dropped (the slice is then
       // interpolated from its neighbours) and the prior carried on, unless the slices
       // keep disagreeing with it for longer than a few slices (the sheet itself changed).
-      const long off = FirstDisagreement(prior, traces[slices[i]], tracer.Pitch());
-      if (off >= 0 && rejected < MaximumRejected &&
-          !DisagreeLocally(prior, traces[slices[i]], tracer.Pitch(), off, tracer.Frame().Rays / 8))
+      if (dropped.size() < MaximumRejected && !AgreeLocally(prior, traces[slices[i]], tracer.Pitch(), longest))
       {
         dropped.emplace_back(slices[i], std::move(traces[slices[i]]));
         traces[slices[i]] = Tracer::Trace{};
-        ++rejected;
         continue;
       }
-      rejected = 0;
-      GiveBackAgreeing(dropped, traces[slices[i]], tracer.Pitch(), tracer.Frame().Rays / 8, traces);
+      GiveBackAgreeing(dropped, traces[slices[i]], tracer.Pitch(), longest, traces);
       dropped.clear();
       prior = CarryShortEnds(traces[slices[i]], prior, carried, tracer.Frame(), voxel);
     }
