@@ -749,18 +749,82 @@ Extraction::ChooseRowSpacing()
   }
 }
 
+// Where the sheet ends along the axis beyond the good slice `from` (towards dir), as a
+// distance from it (mm). The mask says little there: a noisy scan is smoothed before it is
+// thresholded, which dims a blurred edge further, so the mask of a slice that holds the
+// whole sheet can be a third of a full slice's. The scan's own intensities along the edge
+// slice's trace (moved with the roll axis's drift) do not have that bias: their mean above
+// air, as a share of the same along the good slices' own traces next to the edge, is the
+// share of the sheet each slice holds, and a blur spreads the edge evenly about where the
+// share is a half. The edge is put there, between the last slice with half the sheet or
+// more and the next (at most EdgeSlices beyond the good ones).
+double
+Extraction::EdgeReach(long from, long dir) const
+{
+  const double air = context.AirLevel;
+  auto         meanAbove = [&](long traced, long k) {
+    const size_t   n = std::max<size_t>(2, static_cast<size_t>(lengths[traced] / voxel) + 1);
+    const Polyline line = ResampleEvenly(traces[traced], n);
+    const double   shift = static_cast<double>(k - traced) * sz;
+    SliceSampler   sampler(volume, static_cast<size_t>(k));
+    double         sum = 0.0, count = 0.0;
+    for (size_t i = 0; i < n; ++i)
+    {
+      const double x = line[2 * i] + m_Report.AxisSlope[0] * shift, y = line[2 * i + 1] + m_Report.AxisSlope[1] * shift;
+      const long   ix = std::lround(x / sx), iy = std::lround(y / sy);
+      if (ix < 0 || iy < 0 || ix >= static_cast<long>(nx) || iy >= static_cast<long>(ny))
+      {
+        continue;
+      }
+      if (volume.Data != nullptr &&
+          volume.Data[(static_cast<size_t>(k) * ny + static_cast<size_t>(iy)) * nx + static_cast<size_t>(ix)] == 0)
+      {
+        continue;
+      }
+      sum += sampler.Intensity(x, y, air) - air;
+      count += 1.0;
+    }
+    return count > 0.0 ? sum / count : 0.0;
+  };
+  double full = 0.0;
+  for (long j = from; std::abs(j - from) <= 3 && j >= firstGood && j <= lastGood; j -= dir)
+  {
+    if (good[j])
+    {
+      full = std::max(full, meanAbove(j, j));
+    }
+  }
+  if (!(full > 0.0))
+  {
+    return 0.5 * sz;
+  }
+  long   last = from;
+  double lastShare = 1.0, nextShare = 0.0;
+  for (long k = from + dir; k >= 0 && k < static_cast<long>(nz) && std::abs(k - from) <= EdgeSlices; k += dir)
+  {
+    const double share = meanAbove(from, k) / full;
+    if (share < 0.5)
+    {
+      nextShare = share;
+      break;
+    }
+    last = k;
+    lastShare = share;
+  }
+  const double beyond = lastShare > nextShare ? std::clamp((lastShare - 0.5) / (lastShare - nextShare), 0.0, 1.0) : 0.0;
+  return (static_cast<double>(std::abs(last - from)) + beyond) * sz;
+}
+
 SheetMesh
 Extraction::BuildMesh()
 {
   // Rows: a weighted line fit along the slices within one row spacing (BuildSheetGrid).
-  // Where slices beyond the first or last good one hold the sheet (its edge along the axis),
-  // the mesh reaches over them, and half a slice further to the middle of the last one's
-  // voxels, on the trend of the last good slices.
-  // Slices beyond the good ones that still hold most of a slice's material (traces lost
-  // in the faint, blurred slices at the sheet's edge along the axis) are covered too, up to
-  // a few slices.
+  // Where slices beyond the first or last good one hold the sheet (its edge along the axis,
+  // traces lost in its faint, blurred slices), the mesh reaches over them to where the sheet
+  // ends (EdgeReach), on the trend of the last good slices. Without the scan's intensities:
+  // over the slices that hold half a full slice's material, and half a slice further.
   const double fullArea = partialArea / 0.75;
-  auto         reach = [&](long from, long dir) {
+  auto         byArea = [&](long from, long dir) {
     long k = from + dir;
     while (k >= 0 && k < static_cast<long>(nz) && std::abs(k - from) <= EdgeSlices && area[k] >= 0.5 * fullArea)
     {
@@ -770,8 +834,8 @@ Extraction::BuildMesh()
     const bool edge = k >= 0 && k < static_cast<long>(nz) && area[k] > 0.0;
     return static_cast<double>(covered) * sz + (covered > 0 || edge ? 0.5 * sz : 0.0);
   };
-  const double below = reach(firstGood, -1);
-  const double above = reach(lastGood, +1);
+  const double below = volume.Intensity != nullptr ? EdgeReach(firstGood, -1) : byArea(firstGood, -1);
+  const double above = volume.Intensity != nullptr ? EdgeReach(lastGood, +1) : byArea(lastGood, +1);
   const double span = static_cast<double>(lastGood - firstGood) * sz + below + above;
   const auto   rows = static_cast<size_t>(std::max(2.0, std::ceil(span / hw) + 1.0));
   const double rowSpacing = span / static_cast<double>(rows - 1);

@@ -79,6 +79,8 @@ struct Extraction
   AlignColumns();
   void
   ChooseRowSpacing();
+  double
+  EdgeReach(long from, long dir) const;
   SheetMesh
   BuildMesh();
   // The roll's spiral centre in the slice plane at height z (mm): the centroid line moved by

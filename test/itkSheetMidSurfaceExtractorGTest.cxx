@@ -50,6 +50,7 @@ struct SpiralVolume
   size_t               Size[3]{ 80, 80, 8 };
   std::vector<uint8_t> Mask;
   std::vector<uint8_t> Data;
+  std::vector<float>   Intensity;
   // `twist`: the whole spiral turned by that angle (radians) per slice about its centre;
   // `taper`: its radius grown by that many voxels per slice.
   explicit SpiralVolume(size_t slices = 8,
@@ -96,6 +97,7 @@ struct SpiralVolume
     itk::SheetVolumeView view;
     view.Mask = Mask.data();
     view.Data = Data.empty() ? nullptr : Data.data();
+    view.Intensity = Intensity.empty() ? nullptr : Intensity.data();
     for (int d = 0; d < 3; ++d)
     {
       view.Size[d] = Size[d];
@@ -375,6 +377,55 @@ TEST(SheetMidSurfaceExtractor, RowsPastTheTracedSlicesFollowTheRollsTaper)
   std::cout << "edge rows: " << edgePoints << " points, farthest " << largest << " voxel from the sheet" << std::endl;
   EXPECT_GT(edgePoints, 0u);
   EXPECT_LT(largest, 1.0); // 0.94
+}
+
+TEST(SheetMidSurfaceExtractor, TheMeshReachesTheSheetsEdgeWhereTheScanShowsIt)
+{
+  // The sheet fills slices 3 to 20 of 24 (its intensity a Gaussian across it, 1 at its
+  // middle, 0 in the air), but the mask of its first and last four slices holds only a
+  // quarter of it (theta mod 2 pi below pi / 2: the mask of a noisy scan smoothed before
+  // thresholding, which dims a blurred edge further). The scan's intensities show the whole
+  // sheet there: the mesh reaches half a slice past slices 3 and 20, where the sheet ends.
+  // By the mask's material alone it ran from 6.5 to 16.5 only.
+  SpiralVolume volume(24);
+  volume.Intensity.assign(volume.Mask.size(), 0.0f);
+  const size_t plane = volume.Size[0] * volume.Size[1];
+  for (size_t k = 0; k < volume.Size[2]; ++k)
+  {
+    for (size_t j = 0; j < volume.Size[1]; ++j)
+    {
+      for (size_t i = 0; i < volume.Size[0]; ++i)
+      {
+        const size_t index = k * plane + j * volume.Size[0] + i;
+        double       phi = std::atan2(static_cast<double>(j) - 40.0, static_cast<double>(i) - 40.0);
+        phi = phi < 0.0 ? phi + 2.0 * Pi : phi;
+        const bool   sheet = k >= 3 && k <= 20;
+        const bool   edge = k <= 6 || k >= 17;
+        const double d = FromTheSpiral(static_cast<double>(i) - 40.0, static_cast<double>(j) - 40.0, 0.0);
+        const double turns =
+          phi / (2.0 * Pi) + std::round((std::hypot(static_cast<double>(i) - 40.0, static_cast<double>(j) - 40.0) -
+                                         12.0 - 6.0 * phi / (2.0 * Pi)) /
+                                        6.0);
+        volume.Intensity[index] =
+          sheet && turns >= 0.0 && turns <= 2.5 ? static_cast<float>(std::exp(-0.5 * d * d / 1.21)) : 0.0f;
+        volume.Mask[index] = sheet && (!edge || phi < 0.5 * Pi) ? volume.Mask[index] : 0;
+      }
+    }
+  }
+  itk::SheetMidSurfaceExtractor  extractor;
+  itk::SheetMidSurfaceParameters parameters;
+  parameters.Method = itk::SheetSurfaceMethodEnum::Roll;
+  extractor.SetParameters(parameters);
+  const itk::SheetMesh mesh = extractor.Extract(volume.View());
+  double               lowest = 1e9, highest = -1e9;
+  for (size_t p = 0; p < mesh.GetNumberOfPoints(); ++p)
+  {
+    lowest = std::min(lowest, mesh.Points[3 * p + 2]);
+    highest = std::max(highest, mesh.Points[3 * p + 2]);
+  }
+  EXPECT_NEAR(lowest, 2.5, 0.25);
+  EXPECT_NEAR(highest, 20.5, 0.25);
+  ExpectOnTheSpiral(mesh, 0.5);
 }
 
 TEST(SheetMidSurfaceExtractor, GridStepsNameAMeshThatJumpsATurn)
