@@ -840,13 +840,31 @@ Tracer::ToPolyline(const Trace & trace, size_t slice) const
   const auto n = static_cast<long>(trace.Rho.size());
   const long halfWidth = 4;
   Polyline   line(2 * trace.Rho.size());
+  // A short run of steps that leaves the trace's course by half a turn spacing or more and
+  // comes straight back (onto the neighbouring turn or into the gap at a touch, and back)
+  // is no shape of the sheet's: it is put back on the course (the running median over
+  // Rays / 64 steps each side). Its length, twice the excursion, would shift every column
+  // after it along the sheet (slices 20 and 30 voxels longer than their neighbours on a
+  // stress scan), and take the rows fitted across such slices onto the neighbouring turn.
+  std::vector<double> kept(trace.Rho);
+  if (m_Pitch > 0.0 && n > 2)
+  {
+    const std::vector<double> course = RunningMedian(trace.Rho, std::max(8L, m_Frame.Rays / 64));
+    for (size_t i = 0; i < kept.size(); ++i)
+    {
+      if (std::abs(kept[i] - course[i]) >= 0.5 * m_Pitch)
+      {
+        kept[i] = course[i];
+      }
+    }
+  }
   for (long i = 0; i < n; ++i)
   {
     const long h = std::min({ halfWidth, i, n - 1 - i });
     double     sum = 0.0;
     for (long j = i - h; j <= i + h; ++j)
     {
-      sum += trace.Rho[static_cast<size_t>(j)];
+      sum += kept[static_cast<size_t>(j)];
     }
     const double rho = sum / static_cast<double>(2 * h + 1);
     PointAbout(c, static_cast<double>(trace.First + i) * m_Frame.Step, rho, &line[2 * i]);
