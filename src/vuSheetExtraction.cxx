@@ -762,12 +762,16 @@ double
 Extraction::EdgeReach(long from, long dir) const
 {
   const double air = context.AirLevel;
-  auto         meanAbove = [&](long traced, long k) {
-    const size_t   n = std::max<size_t>(2, static_cast<size_t>(lengths[traced] / voxel) + 1);
-    const Polyline line = ResampleEvenly(traces[traced], n);
-    const double   shift = static_cast<double>(k - traced) * sz;
-    SliceSampler   sampler(volume, static_cast<size_t>(k));
-    double         sum = 0.0, count = 0.0;
+  // Slice `traced`'s trace at about a voxel's spacing, resampled once and read in every
+  // slice k beyond it.
+  auto alongTrace = [&](long traced) {
+    return ResampleEvenly(traces[traced], std::max<size_t>(2, static_cast<size_t>(lengths[traced] / voxel) + 1));
+  };
+  auto meanAbove = [&](const Polyline & line, long traced, long k) {
+    const size_t n = PolylineSize(line);
+    const double shift = static_cast<double>(k - traced) * sz;
+    SliceSampler sampler(volume, static_cast<size_t>(k));
+    double       sum = 0.0, count = 0.0;
     for (size_t i = 0; i < n; ++i)
     {
       const double x = line[2 * i] + m_Report.AxisSlope[0] * shift, y = line[2 * i + 1] + m_Report.AxisSlope[1] * shift;
@@ -786,12 +790,13 @@ Extraction::EdgeReach(long from, long dir) const
     }
     return count > 0.0 ? sum / count : 0.0;
   };
-  double full = 0.0;
+  const Polyline edgeLine = alongTrace(from);
+  double         full = 0.0;
   for (long j = from; std::abs(j - from) <= 3 && j >= firstGood && j <= lastGood; j -= dir)
   {
     if (good[j])
     {
-      full = std::max(full, meanAbove(j, j));
+      full = std::max(full, j == from ? meanAbove(edgeLine, j, j) : meanAbove(alongTrace(j), j, j));
     }
   }
   if (!(full > 0.0))
@@ -802,7 +807,7 @@ Extraction::EdgeReach(long from, long dir) const
   double lastShare = 1.0, nextShare = 0.0;
   for (long k = from + dir; k >= 0 && k < static_cast<long>(nz) && std::abs(k - from) <= EdgeSlices; k += dir)
   {
-    const double share = meanAbove(from, k) / full;
+    const double share = meanAbove(edgeLine, from, k) / full;
     if (share < 0.5)
     {
       nextShare = share;
